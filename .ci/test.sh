@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# Sets up a fresh machine and runs every test: C++ (doctest, via CTest) and Python (pytest, via CTest).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash .ci/install-deps.sh
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
+cmake --build build -j"$(nproc)"
+cd build && ctest --output-on-failure -j"$(nproc)" --timeout 1500
