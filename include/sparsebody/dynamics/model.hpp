@@ -1,0 +1,184 @@
+// Articulated model: a tree of rigid bodies in topological order (parent index < child index).
+// Body count and DoF are compile-time bounds, so every per-body and per-DoF array has a fixed size
+// and the algorithms never allocate. Names are std::string (set at construction, never per step).
+#pragma once
+#include <array>
+#include <string>
+
+#include "joint.hpp"
+#include "spatial.hpp"
+
+namespace sparsebody::dynamics {
+
+// Collision shape attached to a body, in body coordinates. Contacts are generated from points:
+// a sphere is its centre with a radius, a capsule its two end spheres, a box its 8 corners.
+template <class S>
+struct Shape {
+  enum class Type : unsigned char { Sphere, Capsule, Box };
+  Type type = Type::Sphere;
+  Vec3<S> pos = Vec3<S>::Zero();        // sphere/box centre; capsule end A
+  Vec3<S> pos2 = Vec3<S>::Zero();       // capsule end B
+  Quat<S> rot = Quat<S>::Identity();    // box orientation
+  Vec3<S> half = Vec3<S>::Zero();       // box half extents
+  S radius = S(0);                      // sphere/capsule radius
+};
+
+template <class S>
+struct Body {
+  static constexpr int kMaxShapes = 4;
+  int parent = -1;                      // -1: attached to the world
+  JointType joint = JointType::Fixed;
+  Vec3<S> axis = Vec3<S>::UnitX();      // revolute axis, unit, joint frame
+  Vec3<S> pos = Vec3<S>::Zero();        // joint frame origin in the parent body frame (X_T)
+  Quat<S> rot = Quat<S>::Identity();    // joint frame orientation in the parent body frame (X_T)
+  S mass = S(0);
+  Vec3<S> com = Vec3<S>::Zero();        // centre of mass, body frame
+  Mat3<S> inertia = Mat3<S>::Zero();    // rotational inertia about com, body axes
+  // Servo and joint parameters (per joint; spherical joints use the same gain on all 3 axes).
+  S kp = S(0), kd = S(0);               // PD gains [N m / rad], [N m s / rad]
+  S damping = S(0);                     // passive viscous damping, treated implicitly like kd
+  S torque_limit = S(0);                // |tau| bound of the servo torque (norm for spherical); 0 = none
+  S lower = S(0), upper = S(0);         // revolute range (rad) or spherical swing bound (rad, in upper)
+  bool limited = false;                 // limits are stored and exported, not enforced by the step
+  std::array<Shape<S>, kMaxShapes> shapes{};
+  int num_shapes = 0;
+  // Derived by Model::finalize().
+  int q_index = 0, v_index = 0;
+  Mat6<S> I = Mat6<S>::Zero();          // spatial inertia about the body origin
+  Transform<S> XT;                      // parent -> joint frame at zero joint coordinates
+};
+
+// A contact point fixed on a body (derived from shapes).
+template <class S>
+struct ContactPoint {
+  int body = 0;
+  Vec3<S> pos = Vec3<S>::Zero();
+  S radius = S(0);
+};
+
+template <class S, int MaxBodies, int MaxDofs>
+struct Model {
+  using Scalar = S;
+  static constexpr int kMaxBodies = MaxBodies;
+  static constexpr int kMaxDofs = MaxDofs;
+  static constexpr int kMaxQ = MaxDofs + MaxBodies;  // quaternions add one coordinate per joint
+  static constexpr int kMaxPoints = MaxBodies * Body<S>::kMaxShapes * 8;
+  using VecV = Eigen::Matrix<S, Eigen::Dynamic, 1, 0, MaxDofs, 1>;   // fixed storage, no heap
+  using VecQ = Eigen::Matrix<S, Eigen::Dynamic, 1, 0, kMaxQ, 1>;
+  using MatV = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic, 0, MaxDofs, MaxDofs>;
+
+  std::string name = "model";
+  std::array<Body<S>, MaxBodies> bodies{};
+  std::array<std::string, MaxBodies> names{};
+  int nb = 0, nq = 0, nv = 0;
+  Vec3<S> gravity = Vec3<S>(S(0), S(-9.81), S(0));
+  std::array<ContactPoint<S>, kMaxPoints> points{};
+  int num_points = 0;
+
+  // Appends a body; returns its index or -1 when a compile-time bound would be exceeded.
+  int addBody(const std::string& body_name, const Body<S>& b) {
+    if (nb >= MaxBodies || nv + jointNv(b.joint) > MaxDofs) return -1;
+    names[nb] = body_name;
+    bodies[nb] = b;
+    ++nb;
+    finalize();
+    return nb - 1;
+  }
+  int find(const std::string& body_name) const {
+    for (int i = 0; i < nb; ++i)
+      if (names[i] == body_name) return i;
+    return -1;
+  }
+  int nvOf(int i) const { return jointNv(bodies[i].joint); }
+  int nqOf(int i) const { return jointNq(bodies[i].joint); }
+  S totalMass() const {
+    S m = 0;
+    for (int i = 0; i < nb; ++i) m += bodies[i].mass;
+    return m;
+  }
+
+  // Recomputes indices, spatial inertias, X_T and contact points after editing bodies.
+  void finalize() {
+    nq = nv = 0;
+    num_points = 0;
+    for (int i = 0; i < nb; ++i) {
+      Body<S>& b = bodies[i];
+      b.q_index = nq;
+      b.v_index = nv;
+      nq += jointNq(b.joint);
+      nv += jointNv(b.joint);
+      b.I = rigidInertia(b.mass, b.com, b.inertia);
+      b.XT.E = b.rot.normalized().toRotationMatrix().transpose();
+      b.XT.r = b.pos;
+      if (b.joint == JointType::Revolute) b.axis.normalize();
+      for (int s = 0; s < b.num_shapes; ++s) addPoints(i, b.shapes[s]);
+    }
+  }
+
+  // Zero-velocity state at the reference configuration (identity rotations, zero angles).
+  VecQ neutralConfiguration() const {
+    VecQ q = VecQ::Zero(nq);
+    for (int i = 0; i < nb; ++i) {
+      const Body<S>& b = bodies[i];
+      if (b.joint == JointType::Free) {
+        q.template segment<3>(b.q_index) = b.pos;
+        q(b.q_index + 3) = b.rot.w();
+        q.template segment<3>(b.q_index + 4) = b.rot.vec();
+      } else if (b.joint == JointType::Spherical) {
+        q(b.q_index) = S(1);
+      }
+    }
+    return q;
+  }
+
+  // Same model in another scalar type (e.g. a float simulation built from a double description).
+  template <class T>
+  Model<T, MaxBodies, MaxDofs> cast() const {
+    Model<T, MaxBodies, MaxDofs> m;
+    m.name = name;
+    m.nb = nb;
+    m.gravity = gravity.template cast<T>();
+    for (int i = 0; i < nb; ++i) {
+      const Body<S>& b = bodies[i];
+      Body<T>& o = m.bodies[i];
+      m.names[i] = names[i];
+      o.parent = b.parent; o.joint = b.joint; o.axis = b.axis.template cast<T>();
+      o.pos = b.pos.template cast<T>(); o.rot = b.rot.template cast<T>();
+      o.mass = T(b.mass); o.com = b.com.template cast<T>(); o.inertia = b.inertia.template cast<T>();
+      o.kp = T(b.kp); o.kd = T(b.kd); o.damping = T(b.damping); o.torque_limit = T(b.torque_limit);
+      o.lower = T(b.lower); o.upper = T(b.upper); o.limited = b.limited; o.num_shapes = b.num_shapes;
+      for (int s = 0; s < b.num_shapes; ++s) {
+        const Shape<S>& a = b.shapes[s];
+        Shape<T>& c = o.shapes[s];
+        c.type = static_cast<typename Shape<T>::Type>(a.type);
+        c.pos = a.pos.template cast<T>(); c.pos2 = a.pos2.template cast<T>();
+        c.rot = a.rot.template cast<T>(); c.half = a.half.template cast<T>(); c.radius = T(a.radius);
+      }
+    }
+    m.finalize();
+    return m;
+  }
+
+ private:
+  void addPoint(int body, const Vec3<S>& p, S r) {
+    if (num_points >= kMaxPoints) return;
+    points[num_points++] = ContactPoint<S>{body, p, r};
+  }
+  void addPoints(int body, const Shape<S>& s) {
+    switch (s.type) {
+      case Shape<S>::Type::Sphere: addPoint(body, s.pos, s.radius); break;
+      case Shape<S>::Type::Capsule: addPoint(body, s.pos, s.radius); addPoint(body, s.pos2, s.radius); break;
+      case Shape<S>::Type::Box: {
+        const Mat3<S> R = s.rot.normalized().toRotationMatrix();
+        for (int k = 0; k < 8; ++k) {
+          const Vec3<S> c((k & 1) ? s.half.x() : -s.half.x(), (k & 2) ? s.half.y() : -s.half.y(),
+                          (k & 4) ? s.half.z() : -s.half.z());
+          addPoint(body, s.pos + R * c, S(0));
+        }
+        break;
+      }
+    }
+  }
+};
+
+}  // namespace sparsebody::dynamics

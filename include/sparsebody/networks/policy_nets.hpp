@@ -1,0 +1,27 @@
+// Control policies as MLPs, tensors under "layers.<i>." (reference: weights_tool/nets.py MLPPolicy).
+//  - Neural3Points control policy pi (SCA 2022, §5): four fully connected layers of neurons, i.e.
+//    input -> 256 -> 256 -> output with ReLU on the two hidden layers; the output is the PD target
+//    rotations of the internal joints.
+//  - QuestSim policy (SIGGRAPH Asia 2022, Appendix): hidden layers [400, 300, 200], tanh on every
+//    layer including the output, which is in [-1, 1] and scaled to +/-200 Nm by the caller.
+#pragma once
+#include "sparsebody/nn/activation.hpp"
+#include "sparsebody/nn/compose.hpp"
+#include "sparsebody/nn/mlp.hpp"
+
+namespace sparsebody::networks {
+
+namespace policy_names {
+inline constexpr char kLayers[] = "layers";
+}
+
+template <typename T, int In, int Out, int Hidden = 256>
+using N3PPolicyNet = nn::Named<policy_names::kLayers, nn::MLP<T, nn::ReLU, nn::Identity, In, Hidden, Hidden, Out>>;
+
+template <typename T, int In, int Out>
+using QuestSimPolicyNet = nn::Named<policy_names::kLayers, nn::MLP<T, nn::Tanh, nn::Tanh, In, 400, 300, 200, Out>>;
+
+inline constexpr const char* kN3PPolicyKind = "n3p_policy";
+inline constexpr const char* kQuestSimPolicyKind = "questsim_policy";
+
+}  // namespace sparsebody::networks

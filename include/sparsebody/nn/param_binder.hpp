@@ -1,0 +1,64 @@
+// Load-time binding of layer parameters: takes tensors from a TensorTable, checks their shapes,
+// converts them to the layer scalar type and packs them into aligned storage owned by a WeightStore.
+// The WeightStore is allocated once, at load, and is immutable afterwards; layers keep only
+// pointers into it, so one store can serve any number of network instances and threads.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sparsebody/core/aligned_buffer.hpp"
+#include "sparsebody/io/tensor_table.hpp"
+#include "sparsebody/nn/panel_matrix.hpp"
+
+namespace sparsebody::nn {
+
+template <typename T>
+class WeightStore {
+ public:
+  T* allocate(std::size_t n) {
+    buffers_.emplace_back(n);
+    bytes_ += n * sizeof(T);
+    return buffers_.back().data();
+  }
+  // Bytes of parameters (including SIMD padding) one forward pass streams.
+  std::size_t bytes() const noexcept { return bytes_; }
+
+ private:
+  std::vector<AlignedBuffer<T>> buffers_;
+  std::size_t bytes_ = 0;
+};
+
+template <typename T>
+class ParamBinder {
+ public:
+  ParamBinder(io::TensorTable& table, WeightStore<T>& store) : table_(table), store_(store) {}
+
+  // Tensor `name` of shape [rows, cols] packed as panels with `packed_rows` rows; row r goes to
+  // row_map[r] (identity when null). Padding rows are zero.
+  PanelMatrix<T> matrix(const std::string& name, int rows, int cols, int packed_rows = -1,
+                        const int* row_map = nullptr) {
+    if (packed_rows < 0) packed_rows = rows;
+    const io::Tensor& t = table_.take(name, {rows, cols});
+    T* dst = store_.allocate(panel_storage<T>(packed_rows, cols));
+    pack_panels<T>(t.values.data(), rows, cols, dst, packed_rows, row_map);
+    return PanelMatrix<T>{dst, packed_rows, cols};
+  }
+
+  // Tensor `name` of shape [n] into an aligned, zero-padded array of `packed_n` values.
+  const T* vector(const std::string& name, int n, int packed_n = -1, const int* index_map = nullptr) {
+    if (packed_n < 0) packed_n = n;
+    const io::Tensor& t = table_.take(name, {n});
+    T* dst = store_.allocate(static_cast<std::size_t>(padded<T>(packed_n)));
+    for (int i = 0; i < n; ++i) dst[index_map ? index_map[i] : i] = static_cast<T>(t.values[i]);
+    return dst;
+  }
+
+  io::TensorTable& table() noexcept { return table_; }
+
+ private:
+  io::TensorTable& table_;
+  WeightStore<T>& store_;
+};
+
+}  // namespace sparsebody::nn
