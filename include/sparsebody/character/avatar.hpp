@@ -1,0 +1,206 @@
+// Default avatar generated from height and mass with de Leva (1996) segment parameters.
+// Topology of the training mocap skeleton (Bandai Namco dataset): Hips (free root), Spine, Chest,
+// Neck, Head, Shoulder_L/R, UpperArm_L/R, LowerArm_L/R, Hand_L/R, UpperLeg_L/R, LowerLeg_L/R,
+// Foot_L/R, Toes_L/R. The mocap's joint_Root is the ground reference frame, not a body.
+// Reference pose: T-pose, Y up, facing +Z (character's left is +X), every joint frame aligned with
+// the world, so a BVH local rotation is directly the joint quaternion.
+//
+// Where de Leva has no segment we split one (documented choices, not measurements):
+//   Neck = 15 % of the head segment mass (the head segment runs from vertex to C7);
+//   Shoulder_L/R (clavicle/scapula) = 10 % each of the upper-trunk mass;
+//   Toes = 20 % of the foot mass.
+// Leg lengths are rescaled together so the ankle sits 4 % of stature above the floor (de Leva's
+// head + trunk + thigh + shank leave only 2 % for the ankle height).
+#pragma once
+#include <string>
+
+#include "../dynamics/model.hpp"
+#include "de_leva.hpp"
+
+namespace sparsebody::character {
+
+struct AvatarOptions {
+  double height = 1.75;           // m (Neural3Points: 1.75 m, 63 kg)
+  double mass = 63.0;             // kg
+  double kp = 200.0, kd = 20.0;   // servo gains on every actuated joint
+  double torque_limit = 300.0;    // N m per joint (norm for spherical joints); 0 = unlimited
+  bool hinge_knees_elbows = true; // revolute knees/elbows (else spherical like the mocap)
+  bool fixed_root = false;        // weld the Hips to the world (testing, upper-body use)
+};
+
+template <class S, int MB = 24, int MD = 72>
+inline dynamics::Model<S, MB, MD> defaultAvatar(const AvatarOptions& o = AvatarOptions{}) {
+  using namespace dynamics;
+  using V = Vec3<S>;
+  namespace dl = de_leva;
+  Model<S, MB, MD> m;
+  m.name = "sparsebody_avatar";
+  const double s = o.height / (dl::kStatureMm / 1000.0);  // length scale
+  auto L = [&](const dl::Segment& g) { return S(g.length_mm / 1000.0 * s); };
+  // Principal inertia from radii of gyration; `axis` = the segment's long axis (0 x, 1 y, 2 z).
+  // Sagittal axis = anteroposterior (z); transverse = the remaining one.
+  auto inertia = [&](double mass, const dl::Segment& g, int axis, double len) {
+    Mat3<S> I = Mat3<S>::Zero();
+    const double rs = g.r_sag * len, rt = g.r_trans * len, rl = g.r_long * len;
+    if (axis == 1) { I(0, 0) = mass * rt * rt; I(1, 1) = mass * rl * rl; I(2, 2) = mass * rs * rs; }
+    else if (axis == 0) { I(0, 0) = mass * rl * rl; I(1, 1) = mass * rt * rt; I(2, 2) = mass * rs * rs; }
+    else { I(0, 0) = mass * rt * rt; I(1, 1) = mass * rs * rs; I(2, 2) = mass * rl * rl; }
+    return I;
+  };
+  auto body = [&](int parent, JointType jt, V pos, double mass, V com, const Mat3<S>& I) {
+    Body<S> b;
+    b.parent = parent; b.joint = jt; b.pos = pos; b.mass = S(mass); b.com = com; b.inertia = I;
+    if (jt != JointType::Free && jt != JointType::Fixed) {
+      b.kp = S(o.kp); b.kd = S(o.kd); b.torque_limit = S(o.torque_limit);
+    }
+    return b;
+  };
+  auto capsule = [](Body<S>& b, V a, V c, S r) {
+    Shape<S>& sh = b.shapes[b.num_shapes++];
+    sh.type = Shape<S>::Type::Capsule; sh.pos = a; sh.pos2 = c; sh.radius = r;
+  };
+  auto sphere = [](Body<S>& b, V c, S r) {
+    Shape<S>& sh = b.shapes[b.num_shapes++];
+    sh.type = Shape<S>::Type::Sphere; sh.pos = c; sh.radius = r;
+  };
+  auto box = [](Body<S>& b, V c, V h) {
+    Shape<S>& sh = b.shapes[b.num_shapes++];
+    sh.type = Shape<S>::Type::Box; sh.pos = c; sh.half = h;
+  };
+  const double M = o.mass;
+  const S H = S(o.height);
+  // Landmark heights (world y) in the reference pose.
+  const S y_c7 = H - L(dl::kHead);
+  const S y_xyph = y_c7 - L(dl::kUpperTrunk);
+  const S y_omph = y_xyph - L(dl::kMiddleTrunk);
+  const S y_midh = y_omph - L(dl::kLowerTrunk);
+  const S ankle_h = S(0.04) * H;
+  const double leg_k = double(y_midh - ankle_h) / double(L(dl::kThigh) + L(dl::kShank));
+  const S l_thigh = S(leg_k) * L(dl::kThigh), l_shank = S(leg_k) * L(dl::kShank);
+  const S hip_x = S(0.085 * s), sh_x = S(0.03 * s), arm_x = S(0.175 * s), sh_drop = S(0.035 * s);
+  const JointType elbow_knee = o.hinge_knees_elbows ? JointType::Revolute : JointType::Spherical;
+
+  // Hips = de Leva lower trunk (omphalion..mid-hip); origin at mid-hip.
+  {
+    const S l = L(dl::kLowerTrunk);
+    Body<S> b = body(-1, o.fixed_root ? JointType::Fixed : JointType::Free, V(0, y_midh, 0),
+                     dl::kLowerTrunk.mass_fraction * M, V(0, S(1 - dl::kLowerTrunk.com) * l, 0),
+                     inertia(dl::kLowerTrunk.mass_fraction * M, dl::kLowerTrunk, 1, l));
+    capsule(b, V(-S(0.07 * s), S(0.35) * l, 0), V(S(0.07 * s), S(0.35) * l, 0), S(0.09 * s));
+    m.addBody("Hips", b);
+  }
+  {  // Spine = middle trunk (xiphoid..omphalion), origin at omphalion
+    const S l = L(dl::kMiddleTrunk);
+    Body<S> b = body(0, JointType::Spherical, V(0, L(dl::kLowerTrunk), 0), dl::kMiddleTrunk.mass_fraction * M,
+                     V(0, S(1 - dl::kMiddleTrunk.com) * l, 0), inertia(dl::kMiddleTrunk.mass_fraction * M, dl::kMiddleTrunk, 1, l));
+    sphere(b, V(0, S(0.5) * l, 0), S(0.1 * s));
+    m.addBody("Spine", b);
+  }
+  const double chest_mass = dl::kUpperTrunk.mass_fraction * M * 0.8;
+  {  // Chest = upper trunk minus the two shoulders, origin at xiphoid
+    const S l = L(dl::kUpperTrunk);
+    Body<S> b = body(1, JointType::Spherical, V(0, L(dl::kMiddleTrunk), 0), chest_mass,
+                     V(0, S(1 - dl::kUpperTrunk.com) * l, 0), inertia(chest_mass, dl::kUpperTrunk, 1, l));
+    capsule(b, V(-S(0.08 * s), S(0.5) * l, 0), V(S(0.08 * s), S(0.5) * l, 0), S(0.1 * s));
+    m.addBody("Chest", b);
+  }
+  const double head_seg = dl::kHead.mass_fraction * M;
+  const S l_head = L(dl::kHead), l_neck = S(0.35) * l_head;
+  {  // Neck: lower 35 % of the head segment length, 15 % of its mass
+    const double mass = 0.15 * head_seg;
+    Body<S> b = body(2, JointType::Spherical, V(0, L(dl::kUpperTrunk), 0), mass, V(0, S(0.5) * l_neck, 0),
+                     inertia(mass, dl::Segment{0, 0, 0, 0.3, 0.3, 0.3}, 1, double(l_neck)));
+    m.addBody("Neck", b);
+  }
+  {  // Head: CoM from de Leva (59.76 % from the vertex) re-expressed from the head joint
+    const double mass = 0.85 * head_seg;
+    const S com_y = (S(1) - S(dl::kHead.com)) * l_head - l_neck;
+    Body<S> b = body(3, JointType::Spherical, V(0, l_neck, 0), mass, V(0, std::max(com_y, S(0.3) * (l_head - l_neck)), 0),
+                     inertia(mass, dl::kHead, 1, double(l_head)));
+    sphere(b, V(0, S(0.45) * (l_head - l_neck), S(0.01 * s)), S(0.1 * s));
+    m.addBody("Head", b);
+  }
+  for (int side = 0; side < 2; ++side) {  // arms: L = +x
+    const S sx = side == 0 ? S(1) : S(-1);
+    const std::string suf = side == 0 ? "_L" : "_R";
+    const double sh_mass = dl::kUpperTrunk.mass_fraction * M * 0.1;
+    const int chest = 2;
+    Body<S> sh = body(chest, JointType::Spherical, V(sx * sh_x, L(dl::kUpperTrunk) - sh_drop, 0), sh_mass,
+                      V(sx * S(0.5) * (arm_x - sh_x), 0, 0),
+                      inertia(sh_mass, dl::Segment{0, 0, 0, 0.3, 0.3, 0.15}, 0, double(arm_x - sh_x)));
+    const int ish = m.addBody("Shoulder" + suf, sh);
+    const S lu = L(dl::kUpperArm), lf = L(dl::kForearm), lh = L(dl::kHand);
+    const double mu = dl::kUpperArm.mass_fraction * M, mf = dl::kForearm.mass_fraction * M, mh = dl::kHand.mass_fraction * M;
+    Body<S> ua = body(ish, JointType::Spherical, V(sx * (arm_x - sh_x), 0, 0), mu, V(sx * S(dl::kUpperArm.com) * lu, 0, 0),
+                      inertia(mu, dl::kUpperArm, 0, double(lu)));
+    capsule(ua, V(sx * S(0.1) * lu, 0, 0), V(sx * S(0.9) * lu, 0, 0), S(0.045 * s));
+    const int iua = m.addBody("UpperArm" + suf, ua);
+    Body<S> la = body(iua, elbow_knee, V(sx * lu, 0, 0), mf, V(sx * S(dl::kForearm.com) * lf, 0, 0),
+                      inertia(mf, dl::kForearm, 0, double(lf)));
+    la.axis = V::UnitY();
+    capsule(la, V(sx * S(0.1) * lf, 0, 0), V(sx * S(0.9) * lf, 0, 0), S(0.04 * s));
+    const int ila = m.addBody("LowerArm" + suf, la);
+    Body<S> hd = body(ila, JointType::Spherical, V(sx * lf, 0, 0), mh, V(sx * S(dl::kHand.com) * lh, 0, 0),
+                      inertia(mh, dl::kHand, 0, double(lh)));
+    capsule(hd, V(sx * S(0.3) * lh, 0, 0), V(sx * S(1.2) * lh, 0, 0), S(0.035 * s));
+    m.addBody("Hand" + suf, hd);
+  }
+  const S lfoot = L(dl::kFoot);
+  const S heel_z = S(-0.22) * lfoot, mtp_z = S(0.51) * lfoot, toe_z = S(0.78) * lfoot;
+  const S foot_hw = S(0.045 * s), toe_h = S(0.025 * s);
+  for (int side = 0; side < 2; ++side) {
+    const S sx = side == 0 ? S(1) : S(-1);
+    const std::string suf = side == 0 ? "_L" : "_R";
+    const double mt = dl::kThigh.mass_fraction * M, ms = dl::kShank.mass_fraction * M;
+    const double mfoot = dl::kFoot.mass_fraction * M * 0.8, mtoe = dl::kFoot.mass_fraction * M * 0.2;
+    Body<S> th = body(0, JointType::Spherical, V(sx * hip_x, 0, 0), mt, V(0, -S(dl::kThigh.com) * l_thigh, 0),
+                      inertia(mt, dl::kThigh, 1, double(l_thigh)));
+    capsule(th, V(0, S(-0.15) * l_thigh, 0), V(0, S(-0.9) * l_thigh, 0), S(0.065 * s));
+    const int ith = m.addBody("UpperLeg" + suf, th);
+    Body<S> sk = body(ith, elbow_knee, V(0, -l_thigh, 0), ms, V(0, -S(dl::kShank.com) * l_shank, 0),
+                      inertia(ms, dl::kShank, 1, double(l_shank)));
+    sk.axis = V::UnitX();
+    capsule(sk, V(0, S(-0.1) * l_shank, 0), V(0, S(-0.85) * l_shank, 0), S(0.05 * s));
+    const int isk = m.addBody("LowerLeg" + suf, sk);
+    // Foot: heel..metatarsophalangeal joint, sole at the floor in the reference pose.
+    Body<S> ft = body(isk, JointType::Spherical, V(0, -l_shank, 0), mfoot,
+                      V(0, S(-0.6) * ankle_h, heel_z + S(0.4) * lfoot), inertia(mfoot, dl::kFoot, 2, double(lfoot)));
+    box(ft, V(0, S(-0.5) * ankle_h, S(0.5) * (heel_z + mtp_z)), V(foot_hw, S(0.5) * ankle_h, S(0.5) * (mtp_z - heel_z)));
+    const int ift = m.addBody("Foot" + suf, ft);
+    Body<S> to = body(ift, JointType::Revolute, V(0, -ankle_h + toe_h, mtp_z), mtoe, V(0, S(-0.5) * toe_h, S(0.5) * (toe_z - mtp_z)),
+                      inertia(mtoe, dl::Segment{0, 0, 0, 0.3, 0.3, 0.2}, 2, double(toe_z - mtp_z)));
+    to.axis = V::UnitX();
+    box(to, V(0, S(-0.5) * toe_h, S(0.5) * (toe_z - mtp_z)), V(foot_hw, S(0.5) * toe_h, S(0.5) * (toe_z - mtp_z)));
+    m.addBody("Toes" + suf, to);
+  }
+  return m;
+}
+
+// QuestSim-style scaling (Winkler et al. 2022, sec. 3.6 / 5.4): every length (joint offsets,
+// centres of mass, collision geometry) scales by `factor`; mass by factor^mass_exponent
+// (3 = constant density, the default; 1 = mass proportional to height) and rotational inertia by
+// factor^(mass_exponent + 2).
+template <class S, int MB, int MD>
+inline dynamics::Model<S, MB, MD> scaleModel(const dynamics::Model<S, MB, MD>& in, S factor, S mass_exponent = S(3)) {
+  dynamics::Model<S, MB, MD> m = in;
+  const S km = std::pow(factor, mass_exponent);
+  for (int i = 0; i < m.nb; ++i) {
+    auto& b = m.bodies[i];
+    b.pos *= factor; b.com *= factor; b.mass *= km; b.inertia *= km * factor * factor;
+    for (int k = 0; k < b.num_shapes; ++k) {
+      b.shapes[k].pos *= factor; b.shapes[k].pos2 *= factor; b.shapes[k].half *= factor; b.shapes[k].radius *= factor;
+    }
+  }
+  m.finalize();
+  return m;
+}
+
+// The default (1.75 m) avatar scaled to a user's height, as QuestSim initialises its character from
+// the headset height (PD gains kept; users can rescale them with the mass).
+template <class S, int MB = 24, int MD = 72>
+inline dynamics::Model<S, MB, MD> avatarForUserHeight(double user_height, AvatarOptions o = AvatarOptions{}) {
+  const double ref = o.height;
+  return scaleModel(defaultAvatar<S, MB, MD>(o), S(user_height / ref));
+}
+
+}  // namespace sparsebody::character

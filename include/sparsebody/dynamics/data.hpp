@@ -1,0 +1,53 @@
+// Per-model workspace: everything the algorithms write, sized by the compile-time bounds and
+// allocated once with the object. All quantities are in body coordinates unless noted.
+#pragma once
+#include <array>
+
+#include <Eigen/Cholesky>
+
+#include "model.hpp"
+
+namespace sparsebody::dynamics {
+
+template <class S, int MaxBodies, int MaxDofs>
+struct Data {
+  using M = Model<S, MaxBodies, MaxDofs>;
+  std::array<Transform<S>, MaxBodies> X{};      // i_X_lambda(i): parent -> body (X_J X_T)
+  std::array<Mat3<S>, MaxBodies> R{};           // world orientation of body i (columns = body axes)
+  std::array<Vec3<S>, MaxBodies> p{};           // world position of body i's origin
+  std::array<Vec6<S>, MaxBodies> v{};           // spatial velocity
+  std::array<Vec6<S>, MaxBodies> c{};           // velocity-product acceleration c_i = v_i x S_i qd_i
+  std::array<Vec6<S>, MaxBodies> a{};           // spatial acceleration (gravity included, a_0 = -g)
+  std::array<Vec6<S>, MaxBodies> f{};           // RNEA body force
+  std::array<Vec6<S>, MaxBodies> bias{};        // v x* I v
+  std::array<Mat6<S>, MaxBodies> IA{};          // articulated inertia I^A
+  std::array<Vec6<S>, MaxBodies> pA{};          // articulated bias force p^A
+  std::array<Mat63<S>, MaxBodies> U{};          // U_i = I^A_i S_i (first columns used)
+  std::array<Mat3<S>, MaxBodies> Dinv{};        // D_i^-1, D_i = S^T I^A S + h (kd + damping)
+  std::array<Vec3<S>, MaxBodies> u{};           // u_i = tau_i - S_i^T p^A_i
+  Eigen::LLT<Mat6<S>> root_llt;                 // factor of the free root's I^A
+  // External loads per body (body coordinates), filled by contact: a force f_ext and an
+  // acceleration-dependent part -K_ext a (linearly implicit contact), i.e. an added inertia K_ext.
+  std::array<Vec6<S>, MaxBodies> fext{};
+  std::array<Mat6<S>, MaxBodies> Kext{};
+  bool has_ext = false;
+  typename M::MatV Mass;                        // CRBA output
+  std::array<Mat6<S>, MaxBodies> Ic{};          // CRBA composite inertia
+  typename M::VecV qdd, tau;
+
+  Data() = default;
+  explicit Data(const M& m) { resize(m); }
+  void resize(const M& m) {
+    Mass.setZero(m.nv, m.nv);
+    qdd.setZero(m.nv);
+    tau.setZero(m.nv);
+    clearExternal();
+  }
+  void clearExternal() {
+    for (auto& x : fext) x.setZero();
+    for (auto& x : Kext) x.setZero();
+    has_ext = false;
+  }
+};
+
+}  // namespace sparsebody::dynamics

@@ -1,0 +1,133 @@
+// Forward kinematics: joint transforms, world poses, spatial velocities and the velocity-product
+// terms c_i used by RNEA and ABA (Featherstone Table 5.1 / 7.1, first pass).
+#pragma once
+#include "data.hpp"
+
+namespace sparsebody::dynamics {
+
+// Quaternion stored as (w, x, y, z) at q[k]; normalised on read so small drift never shears.
+template <class S, class VecQ>
+inline Quat<S> readQuat(const VecQ& q, int k) {
+  Quat<S> r(q(k), q(k + 1), q(k + 2), q(k + 3));
+  const S n2 = r.squaredNorm();
+  if (n2 > S(0)) r.coeffs() /= std::sqrt(n2);
+  return r;
+}
+
+// Parent->child transform X = X_J(q) X_T. The child orientation in the parent is R_T R_J, so
+// E = (R_T R_J)^T; the free root ignores X_T (its coordinates are the pose itself).
+template <class S, int MB, int MD>
+inline Transform<S> jointTransform(const Model<S, MB, MD>& m, int i,
+                                   const typename Model<S, MB, MD>::VecQ& q) {
+  const Body<S>& b = m.bodies[i];
+  Transform<S> X = b.XT;
+  switch (b.joint) {
+    case JointType::Free:
+      X.E = readQuat<S>(q, b.q_index + 3).toRotationMatrix().transpose();
+      X.r = q.template segment<3>(b.q_index);
+      break;
+    case JointType::Spherical:
+      X.E = readQuat<S>(q, b.q_index).toRotationMatrix().transpose() * b.XT.E;
+      break;
+    case JointType::Revolute:
+      X.E = Eigen::AngleAxis<S>(q(b.q_index), b.axis).toRotationMatrix().transpose() * b.XT.E;
+      break;
+    case JointType::Fixed: break;
+  }
+  return X;
+}
+
+// Motion subspace times joint velocity: v_J = S_i qd_i.
+template <class S, int MB, int MD>
+inline Vec6<S> jointVelocity(const Model<S, MB, MD>& m, int i, const typename Model<S, MB, MD>::VecV& qd) {
+  const Body<S>& b = m.bodies[i];
+  Vec6<S> vJ = Vec6<S>::Zero();
+  switch (b.joint) {
+    case JointType::Free: vJ = qd.template segment<6>(b.v_index); break;
+    case JointType::Spherical: vJ.template head<3>() = qd.template segment<3>(b.v_index); break;
+    case JointType::Revolute: vJ.template head<3>() = b.axis * qd(b.v_index); break;
+    case JointType::Fixed: break;
+  }
+  return vJ;
+}
+
+// Pass 1: X_i, world pose (R_i, p_i), v_i and c_i. Only positions when qd is null.
+template <class S, int MB, int MD>
+inline void forwardKinematics(const Model<S, MB, MD>& m, Data<S, MB, MD>& d,
+                              const typename Model<S, MB, MD>::VecQ& q,
+                              const typename Model<S, MB, MD>::VecV* qd) {
+  for (int i = 0; i < m.nb; ++i) {
+    const int pi = m.bodies[i].parent;
+    d.X[i] = jointTransform(m, i, q);
+    const Mat3<S> Rrel = d.X[i].E.transpose();
+    if (pi < 0) {
+      d.R[i] = Rrel;
+      d.p[i] = d.X[i].r;
+    } else {
+      d.R[i] = d.R[pi] * Rrel;
+      d.p[i] = d.p[pi] + d.R[pi] * d.X[i].r;
+    }
+    if (qd) {
+      const Vec6<S> vJ = jointVelocity(m, i, *qd);
+      if (pi < 0) {
+        d.v[i] = vJ;
+        d.c[i].setZero();  // v x vJ = vJ x vJ = 0 at the root
+      } else {
+        d.v[i] = d.X[i].apply(d.v[pi]) + vJ;
+        d.c[i] = crossMotion(d.v[i], vJ);  // S is constant in body coordinates, so c = v x S qd
+      }
+    }
+  }
+}
+
+// World position and velocity of a point fixed on body i (point given in body coordinates);
+// requires forwardKinematics with velocities.
+template <class S, int MB, int MD>
+inline Vec3<S> pointPosition(const Data<S, MB, MD>& d, int i, const Vec3<S>& p) {
+  return d.p[i] + d.R[i] * p;
+}
+template <class S, int MB, int MD>
+inline Vec3<S> pointVelocity(const Data<S, MB, MD>& d, int i, const Vec3<S>& p) {
+  const Vec6<S>& v = d.v[i];
+  return d.R[i] * (Vec3<S>(v.template tail<3>()) + Vec3<S>(v.template head<3>()).cross(p));
+}
+
+// Centre of mass of the whole model (world), after forwardKinematics.
+template <class S, int MB, int MD>
+inline Vec3<S> centerOfMass(const Model<S, MB, MD>& m, const Data<S, MB, MD>& d) {
+  Vec3<S> c = Vec3<S>::Zero();
+  S mt = 0;
+  for (int i = 0; i < m.nb; ++i) {
+    c += m.bodies[i].mass * pointPosition(d, i, m.bodies[i].com);
+    mt += m.bodies[i].mass;
+  }
+  return mt > S(0) ? Vec3<S>(c / mt) : c;
+}
+
+// Kinetic energy 1/2 sum v^T I v and gravitational potential -sum m g.c (world).
+template <class S, int MB, int MD>
+inline S kineticEnergy(const Model<S, MB, MD>& m, const Data<S, MB, MD>& d) {
+  S T = 0;
+  for (int i = 0; i < m.nb; ++i) T += S(0.5) * d.v[i].dot(m.bodies[i].I * d.v[i]);
+  return T;
+}
+template <class S, int MB, int MD>
+inline S potentialEnergy(const Model<S, MB, MD>& m, const Data<S, MB, MD>& d) {
+  S U = 0;
+  for (int i = 0; i < m.nb; ++i) U -= m.bodies[i].mass * m.gravity.dot(pointPosition(d, i, m.bodies[i].com));
+  return U;
+}
+// Total spatial momentum (angular about the world origin; linear), world coordinates.
+template <class S, int MB, int MD>
+inline Vec6<S> spatialMomentum(const Model<S, MB, MD>& m, const Data<S, MB, MD>& d) {
+  Vec6<S> h = Vec6<S>::Zero();
+  for (int i = 0; i < m.nb; ++i) {
+    const Vec6<S> hb = m.bodies[i].I * d.v[i];  // body-coordinates momentum about the body origin
+    const Vec3<S> L = d.R[i] * hb.template tail<3>();
+    h.template tail<3>() += L;
+    h.template head<3>() += d.R[i] * hb.template head<3>() + d.p[i].cross(L);
+  }
+  return h;
+}
+
+}  // namespace sparsebody::dynamics
