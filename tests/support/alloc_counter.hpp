@@ -2,6 +2,7 @@
 // Include in exactly ONE translation unit of a test executable: it replaces global operator new/delete.
 #pragma once
 #include <atomic>
+#include <cstddef>
 #include <cstdlib>
 #include <new>
 

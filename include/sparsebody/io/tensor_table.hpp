@@ -26,7 +26,7 @@ inline std::string shape_string(const std::vector<std::int64_t>& s) {
 
 class TensorTable {
  public:
-  explicit TensorTable(std::string source = {}) : source_(std::move(source)) {}
+  TensorTable(std::string source = {}) : source_(std::move(source)) {}
 
   const std::string& source() const noexcept { return source_; }
   std::map<std::string, Tensor>& tensors() noexcept { return tensors_; }

@@ -2,7 +2,8 @@
 //   Sequential<L0, L1, ...>   output of each layer feeds the next; like torch.nn.Sequential, an
 //                             unnamed child i takes its tensors under "<prefix><i>."
 //   Named<kName, L>           child whose tensors live under "<prefix><kName>." (a module attribute)
-//   Parallel<H0, H1, ...>     heads applied to the same input, outputs concatenated
+//   Parallel<H0, H1, ...>     heads applied to the same input, outputs concatenated; it is a
+//                             grouping, not a module: it adds nothing to its heads' names
 // Names are `inline constexpr char kName[] = "gru";` objects (C++17 non-type template parameters).
 // Intermediate activations live in padded buffers inside the composite's State.
 #pragma once
@@ -35,11 +36,20 @@ template <typename L>
 struct is_named : std::false_type {};
 template <const char* N, typename L>
 struct is_named<Named<N, L>> : std::true_type {};
+template <typename L>
+struct is_grouping : std::false_type {};
+}  // namespace detail
+template <typename... Hs>
+struct Parallel;
+namespace detail {
+template <typename... Hs>
+struct is_grouping<Parallel<Hs...>> : std::true_type {};
 
-// Prefix of child i of a Sequential: named children add their own name, others their index.
+// Prefix of child i of a Sequential: named children add their own name, groupings nothing, others
+// their index (as torch.nn.Sequential does).
 template <typename L>
 std::string child_prefix(const std::string& prefix, std::size_t i) {
-  if constexpr (is_named<L>::value) return prefix;
+  if constexpr (is_named<L>::value || is_grouping<L>::value) return prefix;
   else return prefix + std::to_string(i) + ".";
 }
 }  // namespace detail
