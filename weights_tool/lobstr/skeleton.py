@@ -1,0 +1,159 @@
+"""Skeletons: joint-name mapping across skeletons, the standard skeleton, tracker synthesis, contacts.
+
+The standard skeleton is the one of the training data (Bandai Namco, 21 joints from Hips). Other
+skeletons (e.g. CMU) are mapped onto it by joint names (ROLE_NAMES) and scaled by leg length.
+
+Tracker frames (the convention shared with C++ features/calibration.hpp):
+  pelvis   position of the hips joint; orientation F_hips = the hips frame built from the skeleton
+           geometry: X = left (left minus right thigh root), Y = up (hips -> first spine joint),
+           Z = X x Y = forward. It is rigid with the hips joint, so it is exact on any skeleton.
+  head, hands  joint position; orientation Q_k(t) o_k with o_k = Q_k(t0)^T Yaw(F_hips(t0)): at the
+           calibration frame t0 every tracker points along the body's facing frame (paper §4.2: the
+           rotational offsets are found in a calibration pose).
+"""
+import re
+
+import numpy as np
+
+from . import bvh
+from .rotations import random_rotations, yaw_frame
+
+# role -> accepted joint names (lower case, non-alphanumerics removed)
+ROLE_NAMES = {
+    "hips": ["hips", "pelvis", "hip"],
+    "spine": ["spine", "lowerback", "spine1", "abdomen", "waist"],
+    "head": ["head"],
+    "hand_l": ["handl", "lefthand", "lhand", "lwrist", "leftwrist"],
+    "hand_r": ["handr", "righthand", "rhand", "rwrist", "rightwrist"],
+    "upleg_l": ["upperlegl", "leftupleg", "lthigh", "leftthigh", "leftupperleg", "lhip", "lefthip"],
+    "upleg_r": ["upperlegr", "rightupleg", "rthigh", "rightthigh", "rightupperleg", "rhip", "righthip"],
+    "leg_l": ["lowerlegl", "leftleg", "lshin", "leftshin", "leftlowerleg", "lknee", "leftknee"],
+    "leg_r": ["lowerlegr", "rightleg", "rshin", "rightshin", "rightlowerleg", "rknee", "rightknee"],
+    "foot_l": ["footl", "leftfoot", "lfoot", "lankle", "leftankle"],
+    "foot_r": ["footr", "rightfoot", "rfoot", "rankle", "rightankle"],
+    "toe_l": ["toesl", "lefttoebase", "lefttoe", "ltoe", "ltoes", "lefttoes"],
+    "toe_r": ["toesr", "righttoebase", "righttoe", "rtoe", "rtoes", "righttoes"],
+}
+TRACKED = ["head", "hand_l", "hand_r"]          # order of the three joints in the features
+# The 8 predicted lower-body joints (paper §3: 8 x 6D), standard-skeleton names.
+LOWER = ["UpperLeg_L", "LowerLeg_L", "Foot_L", "Toes_L", "UpperLeg_R", "LowerLeg_R", "Foot_R", "Toes_R"]
+STANDARD_LEG = ("LowerLeg_L", "Foot_L")          # thigh and shin bones: leg length for height scaling
+
+
+def norm_name(n):
+    return re.sub(r"[^a-z0-9]", "", n.lower())
+
+
+def map_roles(names):
+    """role -> joint index, by names; raises ValueError listing missing roles."""
+    nn_ = [norm_name(n) for n in names]
+    out = {}
+    for role, cands in ROLE_NAMES.items():
+        for c in cands:
+            if c in nn_:
+                out[role] = nn_.index(c)
+                break
+    missing = [r for r in ROLE_NAMES if r not in out and r != "spine"]
+    if missing:
+        raise ValueError("cannot map joints by name: no joint for " + ", ".join(missing))
+    return out
+
+
+def leg_length(b, roles):
+    """Thigh + shin length in the file's units."""
+    return float(np.linalg.norm(b.offsets[roles["leg_l"]]) + np.linalg.norm(b.offsets[roles["foot_l"]]))
+
+
+def hips_local_frame(b, roles):
+    """F_local: the tracker frame of the pelvis in hips-local coordinates (X left, Y up, Z forward)."""
+    h = roles["hips"]
+    kids = [j for j, p in enumerate(b.parents) if p == h and j not in (roles["upleg_l"], roles["upleg_r"])]
+    if "spine" in roles and b.parents[roles["spine"]] == h:
+        up = b.offsets[roles["spine"]]
+    else:
+        up = b.offsets[kids[0]]
+    left = b.offsets[roles["upleg_l"]] - b.offsets[roles["upleg_r"]]
+    return frame_from(up, left)
+
+
+def frame_from(up, left):
+    y = up / np.linalg.norm(up)
+    x = left - np.dot(left, y) * y
+    x = x / np.linalg.norm(x)
+    return np.stack([x, y, np.cross(x, y)], axis=-1)
+
+
+def unit_scale(b, roles):
+    """Metres per file unit, guessed from the leg length (a human leg is 0.6-1.1 m): cm, m, or other."""
+    leg = leg_length(b, roles)
+    for s in (0.01, 1.0, 0.0254, 0.001):
+        if 0.5 < leg * s < 1.2:
+            return s
+    return 0.85 / leg
+
+
+class Clip:
+    """A BVH clip in metres with its roles, world transforms and local rotations."""
+
+    def __init__(self, path_or_bvh, units=None):
+        self.bvh = b = bvh.load(path_or_bvh) if isinstance(path_or_bvh, str) else path_or_bvh
+        self.roles = map_roles(b.names)
+        self.units = units if units is not None else unit_scale(b, self.roles)
+        R, t = bvh.local_transforms(b)
+        t = t * self.units
+        self.R_local, self.t_local = R, t
+        self.Rw, self.pw = bvh.fk(b.parents, R, t)
+        self.fps = 1.0 / b.frame_time
+        self.leg = leg_length(b, self.roles) * self.units
+        self.F_local = hips_local_frame(b, self.roles)
+
+    @property
+    def frames(self):
+        return self.Rw.shape[0]
+
+    def floor(self):
+        """Floor height: low percentile of the toe heights minus the standard toe-joint height."""
+        r = self.roles
+        y = np.concatenate([self.pw[:, r["toe_l"], 1], self.pw[:, r["toe_r"], 1]])
+        return float(np.percentile(y, 2)) - 0.042 * self.leg / 0.80
+
+    def trackers(self, t0=0):
+        """Synthetic tracker world poses: positions [F, 4, 3] and rotations [F, 4, 3, 3] in the order
+        head, hand_l, hand_r, pelvis (features.TRACKER_ORDER)."""
+        r = self.roles
+        Fh = self.Rw[:, r["hips"]] @ self.F_local
+        yaw0 = yaw_frame(Fh[t0, :, 2])
+        P = np.empty((self.frames, 4, 3))
+        Q = np.empty((self.frames, 4, 3, 3))
+        for k, role in enumerate(TRACKED):
+            j = r[role]
+            o = self.Rw[t0, j].T @ yaw0
+            P[:, k], Q[:, k] = self.pw[:, j], self.Rw[:, j] @ o
+        P[:, 3], Q[:, 3] = self.pw[:, r["hips"]], Fh
+        return P, Q
+
+
+def add_tracker_noise(rng, P, Q, pos_std=0.01, rot_max_deg=1.5):
+    """Paper Appendix 2: per frame, a random vector of length ~ |N(0, 0.01)| m on positions and a
+    random rotation of at most 1.5 degrees on orientations."""
+    F, K = P.shape[:2]
+    d = rng.normal(size=(F, K, 3))
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    P = P + d * np.abs(rng.normal(0.0, pos_std, size=(F, K, 1)))
+    Q = Q @ random_rotations(rng, F * K, rot_max_deg).reshape(F, K, 3, 3)
+    return P, Q
+
+
+def contact_labels(clip, floor, height=0.02, speed=0.6):
+    """Toe-base contact [F, 2] (left, right): toe joint within `height` m of its standing height and
+    slower than `speed` m/s horizontally (the paper uses height alone; speed removes swing-phase grazes)."""
+    r = clip.roles
+    toe_h = floor + 0.042 * clip.leg / 0.80
+    out = np.zeros((clip.frames, 2), dtype=np.int64)
+    for s, role in enumerate(("toe_l", "toe_r")):
+        p = clip.pw[:, r[role]]
+        v = np.zeros(clip.frames)
+        v[1:] = np.linalg.norm(np.diff(p[:, [0, 2]], axis=0), axis=-1) * clip.fps
+        v[0] = v[1] if clip.frames > 1 else 0.0
+        out[:, s] = (p[:, 1] < toe_h + height) & (v < speed)
+    return out
