@@ -29,9 +29,10 @@ inline void add_gru(sparsebody::io::TensorTable& t, const std::string& prefix, i
     add_random(t, prefix + "bias_hh" + s, {3 * h}, rng);
   }
 }
-inline void add_linear(sparsebody::io::TensorTable& t, const std::string& prefix, int in, int out, std::mt19937& rng) {
-  add_random(t, prefix + "weight", {out, in}, rng);
-  add_random(t, prefix + "bias", {out}, rng);
+inline void add_linear(sparsebody::io::TensorTable& t, const std::string& prefix, int in, int out, std::mt19937& rng,
+                       double scale = 0.3) {
+  add_random(t, prefix + "weight", {out, in}, rng, scale);
+  add_random(t, prefix + "bias", {out}, rng, scale);
 }
 
 }  // namespace sparsebody_test

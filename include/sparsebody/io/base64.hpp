@@ -41,3 +41,30 @@ inline bool base64_decode(std::string_view text, std::vector<std::uint8_t>& out)
 }
 
 }  // namespace sparsebody::io
+
+namespace sparsebody::io {
+
+// Standard base64 with '=' padding (the encoding weights_tool writes; used by C++ exporters and tests).
+inline std::string base64_encode(const std::uint8_t* data, std::size_t n) {
+  static const char* a = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((n + 2) / 3 * 4);
+  std::size_t i = 0;
+  for (; i + 2 < n; i += 3) {
+    const std::uint32_t v = std::uint32_t(data[i]) << 16 | std::uint32_t(data[i + 1]) << 8 | data[i + 2];
+    out += a[v >> 18 & 63];
+    out += a[v >> 12 & 63];
+    out += a[v >> 6 & 63];
+    out += a[v & 63];
+  }
+  if (i < n) {
+    const std::uint32_t v = std::uint32_t(data[i]) << 16 | (i + 1 < n ? std::uint32_t(data[i + 1]) << 8 : 0u);
+    out += a[v >> 18 & 63];
+    out += a[v >> 12 & 63];
+    out += i + 1 < n ? a[v >> 6 & 63] : '=';
+    out += '=';
+  }
+  return out;
+}
+
+}  // namespace sparsebody::io

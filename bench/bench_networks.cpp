@@ -1,0 +1,207 @@
+// Per-step latency of the papers' networks (float, one instance, random weights), each with the
+// weight bytes it streams per step and the achieved bandwidth, against
+//  - LibTorch (same network, one thread, inference mode) when built with it, and
+//  - a plain SIMD read of the same number of bytes: the memory-bandwidth floor for these sizes.
+// Run: build/bench/bench_networks --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include <random>
+#include <string>
+
+#include <benchmark/benchmark.h>
+
+#include "nn/random_tables.hpp"
+#include "ratio_report.hpp"
+#include "sparsebody/core/aligned_buffer.hpp"
+#include "sparsebody/io/base64.hpp"
+#include "sparsebody/networks/lobstr_net.hpp"
+#include "sparsebody/networks/n3p_predictor_net.hpp"
+#include "sparsebody/networks/policy_nets.hpp"
+#include "sparsebody/nn/network.hpp"
+#ifdef SPARSEBODY_BENCH_TORCH
+#include "torch_peer.hpp"
+#endif
+
+using namespace sparsebody;
+using sparsebody_test::add_gru;
+using sparsebody_test::add_linear;
+
+namespace {
+
+inline constexpr char kGru[] = "gru";
+template <int H>
+using GruOnly = nn::Named<kGru, nn::GRU<float, 37, H>>;
+constexpr int kLatent = 256;  // the core issue's benchmark shape: Linear(H->256)+ReLU -> heads
+template <int H>
+using LoBSTr = networks::LoBSTrNet<float, H, kLatent>;
+using Gsig = networks::N3PPredictorNet<float, 45, 64, 12>;
+using Glo = networks::N3PPredictorNet<float, 12, 128, 113>;
+using Gup = networks::N3PPredictorNet<float, 45, 128, 201>;
+using N3PPolicy = networks::N3PPolicyNet<float, 868, 72>;
+using QuestSim = networks::QuestSimPolicyNet<float, 475, 33>;
+
+io::TensorTable lobstr_table(int H, int latent, bool gru_only = false) {
+  std::mt19937 rng(1);
+  io::TensorTable t("random");
+  add_gru(t, "gru.", 37, H, 1, rng);
+  if (!gru_only) {
+    add_linear(t, "latent.", H, latent, rng);
+    add_linear(t, "pose.", latent, 48, rng);
+    add_linear(t, "contact.", latent, 4, rng);
+  }
+  return t;
+}
+io::TensorTable n3p_table(int in, int H, int out) {
+  std::mt19937 rng(2);
+  io::TensorTable t("random");
+  add_linear(t, "encoder.", in, H, rng);
+  add_gru(t, "gru.", H, H, 3, rng);
+  add_linear(t, "decoder.", H, out, rng);
+  return t;
+}
+io::TensorTable mlp_table(std::vector<int> sizes) {
+  std::mt19937 rng(3);
+  io::TensorTable t("random");
+  for (std::size_t i = 0; i + 1 < sizes.size(); ++i)
+    add_linear(t, "layers." + std::to_string(i) + ".", sizes[i], sizes[i + 1], rng, 0.05);
+  return t;
+}
+std::size_t parameter_bytes(const io::TensorTable& t) {
+  std::size_t n = 0;
+  for (const auto& kv : t.tensors()) n += kv.second.values.size() * sizeof(float);
+  return n;
+}
+
+template <class Net>
+std::shared_ptr<const nn::NetworkWeights<Net>> make_weights(io::TensorTable t, const char* kind) {
+  io::WeightsDocument doc{io::ModelInfo{}, std::move(t)};
+  doc.info.kind = kind;
+  doc.info.input_size = Net::in_size;
+  doc.info.output_size = Net::out_size;
+  return nn::NetworkWeights<Net>::from_document(std::move(doc), kind);
+}
+
+template <class Net>
+void bench_network(benchmark::State& st, io::TensorTable table, const char* kind) {
+  const std::size_t param_bytes = parameter_bytes(table);
+  auto w = make_weights<Net>(std::move(table), kind);
+  nn::Network<Net> net(w);
+  std::vector<float> x(Net::in_size);
+  std::mt19937 rng(4);
+  std::normal_distribution<float> d(0, 1);
+  for (auto& v : x) v = d(rng);
+  for (auto _ : st) {
+    const float* y = net.step(x.data());
+    benchmark::DoNotOptimize(y);
+    benchmark::ClobberMemory();
+  }
+  st.counters["weight_bytes"] = double(w->bytes());
+  st.counters["param_bytes"] = double(param_bytes);
+  st.counters["GB/s"] = benchmark::Counter(double(w->bytes()), benchmark::Counter::kIsIterationInvariantRate,
+                                           benchmark::Counter::OneK::kIs1000);
+}
+
+// The floor: stream `bytes` of float weights with aligned SIMD loads into independent accumulators.
+void BM_WeightRead(benchmark::State& st) {
+  const std::size_t n = static_cast<std::size_t>(st.range(0)) / sizeof(float);
+  AlignedBuffer<float> buf(n);
+  for (std::size_t i = 0; i < n; ++i) buf[i] = float(i % 7) * 0.25f;
+  using B = nn::Batch<float>;
+  constexpr std::size_t L = nn::kLanes<float>;
+  for (auto _ : st) {
+    B acc[8] = {B(0.f), B(0.f), B(0.f), B(0.f), B(0.f), B(0.f), B(0.f), B(0.f)};
+    std::size_t i = 0;
+    for (; i + 8 * L <= n; i += 8 * L)
+      for (int k = 0; k < 8; ++k) acc[k] += B::load_aligned(buf.data() + i + k * L);
+    float s = 0;
+    for (; i < n; ++i) s += buf[i];
+    for (int k = 0; k < 8; ++k) s += xsimd::hadd(acc[k]);
+    benchmark::DoNotOptimize(s);
+  }
+  st.counters["GB/s"] = benchmark::Counter(double(n * sizeof(float)), benchmark::Counter::kIsIterationInvariantRate,
+                                           benchmark::Counter::OneK::kIs1000);
+}
+
+// Loading the paper-size LoBSTr model (37->1024 GRU, 13 MB of float32) from weights JSON text.
+void BM_LoadLoBSTr1024(benchmark::State& st) {
+  const bool base64 = st.range(0) == 1;
+  io::TensorTable t = lobstr_table(1024, 128);
+  nlohmann::json j = {{"format", "sparsebody-weights"}, {"version", 1}, {"kind", "lobstr"},
+                      {"meta", {{"input_size", 37}, {"output_size", 52}}}};
+  for (const auto& kv : t.tensors()) {
+    nlohmann::json tj = {{"shape", kv.second.shape}};
+    if (base64) {
+      std::vector<float> f(kv.second.values.begin(), kv.second.values.end());
+      tj["dtype"] = "float32";
+      tj["data"] = io::base64_encode(reinterpret_cast<const std::uint8_t*>(f.data()), f.size() * 4);
+    } else {
+      tj["data"] = kv.second.values;
+    }
+    j["tensors"][kv.first] = tj;
+  }
+  const std::string text = j.dump();
+  for (auto _ : st) {
+    auto w = nn::NetworkWeights<networks::LoBSTrNet<float, 1024, 128>>::from_string(text, "lobstr", "bench");
+    benchmark::DoNotOptimize(w.get());
+  }
+  st.counters["json_MB"] = double(text.size()) / 1e6;
+}
+
+#ifdef SPARSEBODY_BENCH_TORCH
+void bench_torch(benchmark::State& st, std::unique_ptr<sparsebody_bench::TorchPeer> p) {
+  for (auto _ : st) p->step();
+}
+#endif
+
+struct Entry {
+  std::string name;
+  std::size_t weight_bytes;  // what sparsebody streams per step (padded), for the matching read
+};
+
+void register_all() {
+  using sparsebody_bench::add_ratio;
+  auto reg = [](const std::string& name, auto fn) { benchmark::RegisterBenchmark(name.c_str(), fn)->Unit(benchmark::kMicrosecond); };
+  auto bytes_of = [](auto w) { return w->bytes(); };
+  std::vector<Entry> entries;
+#define SB_NET(NAME, NET, TABLE, KIND)                                                           \
+  reg("sparsebody/" NAME, [](benchmark::State& s) { bench_network<NET>(s, TABLE, KIND); });      \
+  entries.push_back({NAME, bytes_of(make_weights<NET>(TABLE, KIND))});
+  SB_NET("GRU_37x1024", GruOnly<1024>, lobstr_table(1024, 0, true), "gru")
+  SB_NET("GRU_37x256", GruOnly<256>, lobstr_table(256, 0, true), "gru")
+  SB_NET("LoBSTr_H1024", LoBSTr<1024>, lobstr_table(1024, kLatent), "lobstr")
+  SB_NET("LoBSTr_H256", LoBSTr<256>, lobstr_table(256, kLatent), "lobstr")
+  SB_NET("N3P_Gsig_H64", Gsig, n3p_table(45, 64, 12), "n3p_signal")
+  SB_NET("N3P_Glo_H128", Glo, n3p_table(12, 128, 113), "n3p_lower")
+  SB_NET("N3P_Gup_H128", Gup, n3p_table(45, 128, 201), "n3p_upper")
+  SB_NET("N3P_policy_868_256_256_72", N3PPolicy, mlp_table({868, 256, 256, 72}), "n3p_policy")
+  SB_NET("QuestSim_475_400_300_200_33", QuestSim, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
+#undef SB_NET
+  for (const Entry& e : entries) {
+    const std::string read = "read/" + std::to_string(e.weight_bytes) + "B";
+    benchmark::RegisterBenchmark(read.c_str(), BM_WeightRead)->Arg(static_cast<int64_t>(e.weight_bytes))->Unit(benchmark::kMicrosecond);
+    add_ratio(e.name + " / plain read of its weights", "sparsebody/" + e.name,
+              read + "/" + std::to_string(e.weight_bytes));
+  }
+#ifdef SPARSEBODY_BENCH_TORCH
+  using namespace sparsebody_bench;
+  torch_init_single_thread();
+  reg("libtorch/GRU_37x1024", [](benchmark::State& s) { bench_torch(s, torch_lobstr(1024, kLatent)); });
+  reg("libtorch/LoBSTr_H1024", [](benchmark::State& s) { bench_torch(s, torch_lobstr(1024, kLatent)); });
+  reg("libtorch/LoBSTr_H256", [](benchmark::State& s) { bench_torch(s, torch_lobstr(256, kLatent)); });
+  reg("libtorch/N3P_Gsig_H64", [](benchmark::State& s) { bench_torch(s, torch_n3p_predictor(45, 64, 12)); });
+  reg("libtorch/N3P_Glo_H128", [](benchmark::State& s) { bench_torch(s, torch_n3p_predictor(12, 128, 113)); });
+  reg("libtorch/N3P_Gup_H128", [](benchmark::State& s) { bench_torch(s, torch_n3p_predictor(45, 128, 201)); });
+  reg("libtorch/N3P_policy_868_256_256_72", [](benchmark::State& s) { bench_torch(s, torch_mlp({868, 256, 256, 72}, false)); });
+  reg("libtorch/QuestSim_475_400_300_200_33", [](benchmark::State& s) { bench_torch(s, torch_mlp({475, 400, 300, 200, 33}, true)); });
+  for (const char* n : {"LoBSTr_H1024", "LoBSTr_H256", "N3P_Gsig_H64", "N3P_Glo_H128", "N3P_Gup_H128",
+                        "N3P_policy_868_256_256_72", "QuestSim_475_400_300_200_33"})
+    add_ratio(std::string(n) + " sparsebody / LibTorch", std::string("sparsebody/") + n, std::string("libtorch/") + n);
+#endif
+  benchmark::RegisterBenchmark("load/LoBSTr_H1024_json_list", BM_LoadLoBSTr1024)->Arg(0)->Unit(benchmark::kMillisecond)->Iterations(3);
+  benchmark::RegisterBenchmark("load/LoBSTr_H1024_json_base64", BM_LoadLoBSTr1024)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(5);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  register_all();
+  return sparsebody_bench::run_with_ratios(argc, argv, "sparsebody networks");
+}

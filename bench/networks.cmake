@@ -1,0 +1,15 @@
+# Per-step latency of the papers' networks, with LibTorch (Debian libtorch-dev) in the same binary
+# when found, and a plain read of the same weight bytes as the memory-bandwidth floor.
+sparsebody_add_bench(bench_networks ${CMAKE_CURRENT_LIST_DIR}/bench_networks.cpp)
+target_include_directories(bench_networks PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+find_package(Torch QUIET CONFIG)
+if(Torch_FOUND)
+  message(STATUS "sparsebody bench: LibTorch found, networks are compared against it")
+  add_library(sparsebody_torch_peer STATIC ${CMAKE_CURRENT_LIST_DIR}/torch_peer.cpp)
+  target_link_libraries(sparsebody_torch_peer PUBLIC ${TORCH_LIBRARIES})
+  target_compile_features(sparsebody_torch_peer PUBLIC cxx_std_17)
+  target_link_libraries(bench_networks PRIVATE sparsebody_torch_peer)
+  target_compile_definitions(bench_networks PRIVATE SPARSEBODY_BENCH_TORCH=1)
+else()
+  message(STATUS "sparsebody bench: LibTorch not found, no LibTorch comparison")
+endif()
