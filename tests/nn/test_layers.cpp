@@ -2,6 +2,7 @@
 // (PyTorch parity is in test_parity_*.cpp), plus state handling and weight sharing.
 #include <cmath>
 #include <random>
+#include <limits>
 #include <thread>
 #include <vector>
 
@@ -216,4 +217,38 @@ TEST_CASE("one set of weights serves many threads") {
   for (auto& x : th) x.join();
   for (int k = 0; k < 4; ++k) CHECK(serial[k] == threaded[k]);
   CHECK(serial[0] != serial[1]);
+}
+
+TEST_CASE("step_guarded: NaN/Inf input is rejected without touching the state; a diverged output resets it") {
+  using Net = nn::Named<kG, nn::GRU<float, 3, 5, 1>>;
+  std::mt19937 rng(11);
+  io::TensorTable t("test");
+  add_gru(t, "g.", 3, 5, 1, rng);
+  io::WeightsDocument doc{io::ModelInfo{}, t};
+  doc.info.kind = "gru";
+  doc.info.input_size = 3;
+  doc.info.output_size = 5;
+  auto w = nn::NetworkWeights<Net>::from_document(doc, "gru");
+  nn::Network<Net> a(w), b(w);
+  const float good[3] = {0.1f, -0.2f, 0.3f};
+  const float nan_in[3] = {0.1f, std::numeric_limits<float>::quiet_NaN(), 0.3f};
+  const float inf_in[3] = {std::numeric_limits<float>::infinity(), 0.f, 0.f};
+  CHECK(a.step_guarded(good) == nn::StepStatus::kOk);
+  b.step(good);
+  std::vector<float> before(a.output().data(), a.output().data() + 5);
+  CHECK(a.step_guarded(nan_in) == nn::StepStatus::kRejectedInput);
+  CHECK(a.step_guarded(inf_in) == nn::StepStatus::kRejectedInput);
+  for (int i = 0; i < 5; ++i) CHECK(a.output()[i] == before[i]);
+  // state untouched: the next good frame gives exactly what an instance that never saw NaN gives
+  CHECK(a.step_guarded(good) == nn::StepStatus::kOk);
+  const float* yb = b.step(good);
+  for (int i = 0; i < 5; ++i) CHECK(a.output()[i] == yb[i]);
+  // a corrupted hidden state (NaN) is detected from the output and reset
+  std::vector<float> last(a.output().data(), a.output().data() + 5);
+  a.state().h[0][2] = std::numeric_limits<float>::quiet_NaN();
+  CHECK(a.step_guarded(good) == nn::StepStatus::kStateReset);
+  for (int i = 0; i < 5; ++i) CHECK(a.output()[i] == last[i]);
+  for (int i = 0; i < 5; ++i) CHECK(a.state().h[0][i] == 0.f);
+  CHECK(a.step_guarded(good) == nn::StepStatus::kOk);
+  for (int i = 0; i < 5; ++i) CHECK(std::isfinite(a.output()[i]));
 }

@@ -9,6 +9,7 @@
 // output_mean. Network owns only its State (hidden states, scratch), itself allocated once at
 // construction so that even 1024-wide GRU instances never sit on the caller's stack.
 #pragma once
+#include <cmath>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -99,6 +100,14 @@ class NetworkWeights {
   const T* out_std_ = nullptr;
 };
 
+// What step_guarded() did with a frame.
+enum class StepStatus {
+  kOk,             // stepped normally
+  kRejectedInput,  // an input was NaN/Inf: nothing changed, output() still holds the last good output
+  kStateReset,     // the step produced a non-finite output (diverged state): the recurrent state was
+                   // reset to zero and output() still holds the last good output
+};
+
 template <class Net>
 class Network {
  public:
@@ -131,6 +140,25 @@ class Network {
   Eigen::Map<const Output> step(const Eigen::Ref<const Input>& x) noexcept {
     return Eigen::Map<const Output>(step(x.data()));
   }
+
+  // step() with the bad-input policy applied: a frame with a non-finite input is not fed to the
+  // network (a NaN would poison the hidden state for good), and a non-finite result resets the
+  // recurrent state; in both cases output() keeps the last good output (zeros before any).
+  StepStatus step_guarded(const T* x) noexcept {
+    for (int i = 0; i < in_size; ++i)
+      if (!std::isfinite(x[i])) return StepStatus::kRejectedInput;
+    T* last = mem_->last_good.data();
+    const T* y = step(x);
+    bool finite = true;
+    for (int i = 0; i < out_size; ++i) finite &= static_cast<bool>(std::isfinite(y[i]));
+    if (!finite) {
+      reset();
+      for (int i = 0; i < out_size; ++i) mem_->output.v[i] = last[i];
+      return StepStatus::kStateReset;
+    }
+    for (int i = 0; i < out_size; ++i) last[i] = y[i];
+    return StepStatus::kOk;
+  }
   // Outputs of the last step.
   Eigen::Map<const Output> output() const noexcept { return Eigen::Map<const Output>(mem_->output.data()); }
 
@@ -146,6 +174,7 @@ class Network {
     State state{};
     PaddedVector<T, in_size> input;
     PaddedVector<T, out_size> output;
+    PaddedVector<T, out_size> last_good;  // for step_guarded()
   };
   std::shared_ptr<const NetworkWeights<Net>> weights_;
   std::unique_ptr<Memory> mem_;
