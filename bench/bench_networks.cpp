@@ -32,6 +32,10 @@ using GruOnly = nn::Named<kGru, nn::GRU<float, 37, H>>;
 constexpr int kLatent = 256;  // the core issue's benchmark shape: Linear(H->256)+ReLU -> heads
 template <int H>
 using LoBSTr = networks::LoBSTrNet<float, H, kLatent>;
+template <int H>
+using GruOnlyF16 = nn::Named<kGru, nn::GRU<float, 37, H, 1, nn::f16>>;
+template <int H>
+using LoBSTrF16 = networks::LoBSTrNet<float, H, kLatent, 37, nn::f16>;
 using Gsig = networks::N3PPredictorNet<float, 45, 64, 12>;
 using Glo = networks::N3PPredictorNet<float, 12, 128, 113>;
 using Gup = networks::N3PPredictorNet<float, 45, 128, 201>;
@@ -168,12 +172,21 @@ void register_all() {
   SB_NET("GRU_37x256", GruOnly<256>, lobstr_table(256, 0, true), "gru")
   SB_NET("LoBSTr_H1024", LoBSTr<1024>, lobstr_table(1024, kLatent), "lobstr")
   SB_NET("LoBSTr_H256", LoBSTr<256>, lobstr_table(256, kLatent), "lobstr")
+  SB_NET("GRU_37x1024_f16weights", GruOnlyF16<1024>, lobstr_table(1024, 0, true), "gru")
+  SB_NET("GRU_37x256_f16weights", GruOnlyF16<256>, lobstr_table(256, 0, true), "gru")
+  SB_NET("LoBSTr_H1024_f16weights", LoBSTrF16<1024>, lobstr_table(1024, kLatent), "lobstr")
   SB_NET("N3P_Gsig_H64", Gsig, n3p_table(45, 64, 12), "n3p_signal")
   SB_NET("N3P_Glo_H128", Glo, n3p_table(12, 128, 113), "n3p_lower")
   SB_NET("N3P_Gup_H128", Gup, n3p_table(45, 128, 201), "n3p_upper")
   SB_NET("N3P_policy_868_256_256_72", N3PPolicy, mlp_table({868, 256, 256, 72}), "n3p_policy")
   SB_NET("QuestSim_475_400_300_200_33", QuestSim, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
 #undef SB_NET
+  add_ratio("GRU_37x1024 f16 weights / plain read of its float weights", "sparsebody/GRU_37x1024_f16weights",
+            "read/" + std::to_string(entries[0].weight_bytes) + "B/" + std::to_string(entries[0].weight_bytes));
+  add_ratio("LoBSTr_H1024 f16 weights / plain read of its float weights", "sparsebody/LoBSTr_H1024_f16weights",
+            "read/" + std::to_string(entries[2].weight_bytes) + "B/" + std::to_string(entries[2].weight_bytes));
+  add_ratio("LoBSTr_H1024 f16 weights sparsebody / LibTorch float", "sparsebody/LoBSTr_H1024_f16weights",
+            "libtorch/LoBSTr_H1024");
   for (const Entry& e : entries) {
     const std::string read = "read/" + std::to_string(e.weight_bytes) + "B";
     benchmark::RegisterBenchmark(read.c_str(), BM_WeightRead)->Arg(static_cast<int64_t>(e.weight_bytes))->Unit(benchmark::kMicrosecond);

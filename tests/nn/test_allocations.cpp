@@ -50,6 +50,10 @@ TEST_CASE("zero allocations: policies") {
   check_golden_no_alloc<PolicySmall>("policy_small", "n3p_policy");
   check_golden_no_alloc<MlpTanhSmall>("mlp_tanh_small", "mlp");
 }
+TEST_CASE("zero allocations: LoBSTr with float16 weight storage") {
+  check_no_alloc(sparsebody::nn::NetworkWeights<sparsebody::networks::LoBSTrNet<float, 40, 24, 37, sparsebody::nn::f16>>::load(
+      kDir + "/lobstr_small.weights.json", "lobstr"));
+}
 TEST_CASE("zero allocations: paper-size LoBSTr 37->1024") {
   std::mt19937 rng(1);
   sparsebody::io::TensorTable t("random");

@@ -22,10 +22,11 @@ inline constexpr int kLoBSTrFeatures = 37;      // 4 x 9 velocities + reference 
 inline constexpr int kLoBSTrPoseOutputs = 48;   // 8 joints x 6D
 inline constexpr int kLoBSTrContactOutputs = 4; // 2 feet x 2 classes
 
-template <typename T, int Hidden = 1024, int Latent = 128, int In = kLoBSTrFeatures>
+// W: stored weight type of the GRU and the latent layer (T, or nn::f16 to halve the bytes per step).
+template <typename T, int Hidden = 1024, int Latent = 128, int In = kLoBSTrFeatures, typename W = T>
 using LoBSTrNet = nn::Sequential<
-    nn::Named<lobstr_names::kGru, nn::GRU<T, In, Hidden>>,
-    nn::Named<lobstr_names::kLatent, nn::Dense<T, Hidden, Latent, nn::ReLU>>,
+    nn::Named<lobstr_names::kGru, nn::GRU<T, In, Hidden, 1, W>>,
+    nn::Named<lobstr_names::kLatent, nn::Dense<T, Hidden, Latent, nn::ReLU, true, W>>,
     nn::Parallel<nn::Named<lobstr_names::kPose, nn::Dense<T, Latent, kLoBSTrPoseOutputs>>,
                  nn::Named<lobstr_names::kContact, nn::Dense<T, Latent, kLoBSTrContactOutputs, nn::Softmax<2>>>>>;
 

@@ -15,10 +15,11 @@ inline constexpr char kGru[] = "gru";
 inline constexpr char kDecoder[] = "decoder";
 }  // namespace n3p_names
 
-template <typename T, int In, int Hidden, int Out, int GruLayers = 3>
-using N3PPredictorNet = nn::Sequential<nn::Named<n3p_names::kEncoder, nn::Dense<T, In, Hidden>>,
-                                       nn::Named<n3p_names::kGru, nn::GRU<T, Hidden, Hidden, GruLayers>>,
-                                       nn::Named<n3p_names::kDecoder, nn::Dense<T, Hidden, Out>>>;
+// W: stored weight type (T, or nn::f16 to halve the bytes per step).
+template <typename T, int In, int Hidden, int Out, int GruLayers = 3, typename W = T>
+using N3PPredictorNet = nn::Sequential<nn::Named<n3p_names::kEncoder, nn::Dense<T, In, Hidden, nn::Identity, true, W>>,
+                                       nn::Named<n3p_names::kGru, nn::GRU<T, Hidden, Hidden, GruLayers, W>>,
+                                       nn::Named<n3p_names::kDecoder, nn::Dense<T, Hidden, Out, nn::Identity, true, W>>>;
 
 inline constexpr const char* kN3PSignalKind = "n3p_signal";
 inline constexpr const char* kN3PLowerKind = "n3p_lower";

@@ -1,12 +1,13 @@
 // Fully connected layer y = act(W x + b), PyTorch nn.Linear semantics (weight [Out, In], bias [Out])
-// with an optional fused activation (see activation.hpp).
+// with an optional fused activation (see activation.hpp). W is the stored weight type: T, or f16 to
+// halve the bytes a step streams (biases stay in T).
 #pragma once
 #include "sparsebody/nn/activation.hpp"
 #include "sparsebody/nn/layer.hpp"
 
 namespace sparsebody::nn {
 
-template <typename T, int In, int Out, typename Act = Identity, bool HasBias = true>
+template <typename T, int In, int Out, typename Act = Identity, bool HasBias = true, typename W = T>
 struct Dense {
   static_assert(In > 0 && Out > 0, "Dense: sizes must be positive");
   using scalar = T;
@@ -14,13 +15,13 @@ struct Dense {
   static constexpr int out_size = Out;
 
   struct Params {
-    PanelMatrix<T> weight;   // W: [Out, In]
+    PanelMatrix<T, W> weight;  // W: [Out, In]
     const T* bias = nullptr; // b: [Out], padded; null without bias
   };
   using State = NoState;
 
   static void bind(Params& p, ParamBinder<T>& b, const std::string& prefix) {
-    p.weight = b.matrix(prefix + "weight", Out, In);
+    p.weight = b.template matrix<W>(prefix + "weight", Out, In);
     if constexpr (HasBias) p.bias = b.vector(prefix + "bias", Out);
   }
 

@@ -10,7 +10,8 @@
 //
 // At load each gate block is re-placed at a batch-aligned offset (0, Hp, 2Hp with Hp = padded(H)),
 // so the gate update runs on aligned full batches for any H. Padding lanes compute r = z = 1/2,
-// n = 0 and so keep h's padding at zero.
+// n = 0 and so keep h's padding at zero. W is the stored weight type: T, or f16 for float networks
+// (half the bytes per step; biases stay in T).
 #pragma once
 #include <vector>
 
@@ -19,7 +20,7 @@
 
 namespace sparsebody::nn {
 
-template <typename T, int In, int H, int Layers = 1>
+template <typename T, int In, int H, int Layers = 1, typename W = T>
 struct GRU {
   static_assert(In > 0 && H > 0 && Layers > 0, "GRU: sizes must be positive");
   using scalar = T;
@@ -30,8 +31,8 @@ struct GRU {
   static constexpr int Hp = padded<T>(H);
 
   struct LayerParams {
-    PanelMatrix<T> w_ih;  // [3Hp, in_k] packed
-    PanelMatrix<T> w_hh;  // [3Hp, H] packed
+    PanelMatrix<T, W> w_ih;  // [3Hp, in_k] packed
+    PanelMatrix<T, W> w_hh;  // [3Hp, H] packed
     const T* b_ih = nullptr;
     const T* b_hh = nullptr;
   };
@@ -58,8 +59,8 @@ struct GRU {
     for (int k = 0; k < Layers; ++k) {
       const std::string s = "_l" + std::to_string(k);
       const int in_k = k == 0 ? In : H;
-      p.layer[k].w_ih = b.matrix(prefix + "weight_ih" + s, 3 * H, in_k, 3 * Hp, row_map.data());
-      p.layer[k].w_hh = b.matrix(prefix + "weight_hh" + s, 3 * H, H, 3 * Hp, row_map.data());
+      p.layer[k].w_ih = b.template matrix<W>(prefix + "weight_ih" + s, 3 * H, in_k, 3 * Hp, row_map.data());
+      p.layer[k].w_hh = b.template matrix<W>(prefix + "weight_hh" + s, 3 * H, H, 3 * Hp, row_map.data());
       p.layer[k].b_ih = b.vector(prefix + "bias_ih" + s, 3 * H, 3 * Hp, row_map.data());
       p.layer[k].b_hh = b.vector(prefix + "bias_hh" + s, 3 * H, 3 * Hp, row_map.data());
     }

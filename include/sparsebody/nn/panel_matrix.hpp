@@ -16,6 +16,9 @@
 #include <cstddef>
 #include <cstring>
 
+#include <type_traits>
+
+#include "sparsebody/nn/half.hpp"
 #include "sparsebody/nn/simd.hpp"
 
 namespace sparsebody::nn {
@@ -28,18 +31,43 @@ constexpr std::size_t panel_storage(int rows, int cols) {
   return static_cast<std::size_t>(padded<T>(rows)) * static_cast<std::size_t>(cols);
 }
 
-// Read-only view of a panel-layout matrix living in load-time storage.
-template <typename T>
+// Read-only view of a panel-layout matrix living in load-time storage. T is the arithmetic type,
+// W the stored weight type: T itself, or f16 (half the bytes, widened to float in registers).
+template <typename T, typename W = T>
 struct PanelMatrix {
-  const T* data = nullptr;
+  static_assert(std::is_same_v<W, T> || (std::is_same_v<W, f16> && std::is_same_v<T, float>),
+                "weights are stored as the scalar type, or as f16 for float networks");
+  const W* data = nullptr;
   int rows = 0;
   int cols = 0;
 };
 
+// Loads one batch of stored weights as a batch of T.
+template <typename T, typename W>
+inline Batch<T> load_weights(const W* p) noexcept {
+  if constexpr (std::is_same_v<W, T>) {
+    return Batch<T>::load_aligned(p);
+  } else {
+#if defined(__AVX512F__)
+    if constexpr (kLanes<float> == 16) return Batch<float>(_mm512_cvtph_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(p))));
+#endif
+#if defined(__F16C__) && defined(__AVX__)
+    if constexpr (kLanes<float> == 8) return Batch<float>(_mm256_cvtph_ps(_mm_load_si128(reinterpret_cast<const __m128i*>(p))));
+#endif
+#if defined(__F16C__)
+    if constexpr (kLanes<float> == 4) return Batch<float>(_mm_cvtph_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p))));
+#endif
+    alignas(kBufferAlign) float tmp[kLanes<float>];  // portable path (no F16C): correct, slower
+    for (int i = 0; i < kLanes<float>; ++i) tmp[i] = to_float(p[i]);
+    return Batch<float>::load_aligned(tmp);
+  }
+}
+
 // Writes row-major src (rows x cols) into panel layout at dst (panel_storage values, pre-zeroed).
 // `row_map` lets callers re-place rows (the GRU uses it to align each gate block); identity if null.
-template <typename T, typename Src>
-void pack_panels(const Src* src, int rows, int cols, T* dst, int packed_rows, const int* row_map = nullptr) {
+// T decides the panel geometry (lanes of the arithmetic type), W the stored element type.
+template <typename T, typename W = T, typename Src>
+void pack_panels(const Src* src, int rows, int cols, W* dst, int packed_rows, const int* row_map = nullptr) {
   constexpr int L = kLanes<T>;
   const int prows = padded<T>(packed_rows);
   for (int r = 0; r < rows; ++r) {
@@ -47,15 +75,16 @@ void pack_panels(const Src* src, int rows, int cols, T* dst, int packed_rows, co
     const int panel = pr / (kPanelBatches * L);
     const int panel_row0 = panel * kPanelBatches * L;
     const int height = (prows - panel_row0) < kPanelBatches * L ? (prows - panel_row0) : kPanelBatches * L;
-    T* base = dst + static_cast<std::size_t>(panel_row0) * cols;
+    W* base = dst + static_cast<std::size_t>(panel_row0) * cols;
     for (int c = 0; c < cols; ++c)
-      base[static_cast<std::size_t>(c) * height + (pr - panel_row0)] = static_cast<T>(src[static_cast<std::size_t>(r) * cols + c]);
+      base[static_cast<std::size_t>(c) * height + (pr - panel_row0)] =
+          from_double<W>(static_cast<double>(src[static_cast<std::size_t>(r) * cols + c]));
   }
 }
 
 namespace detail {
-template <typename T, int NB>
-inline void panel_gemv(const T* __restrict w, int cols, const T* __restrict x, const T* __restrict bias,
+template <typename T, typename W, int NB>
+inline void panel_gemv(const W* __restrict w, int cols, const T* __restrict x, const T* __restrict bias,
                        T* __restrict y) noexcept {
   using B = Batch<T>;
   constexpr int L = kLanes<T>;
@@ -63,34 +92,35 @@ inline void panel_gemv(const T* __restrict w, int cols, const T* __restrict x, c
   for (int b = 0; b < NB; ++b) acc[b] = bias ? B::load_aligned(bias + b * L) : B(T(0));
   for (int j = 0; j < cols; ++j) {
     const B xj(x[j]);
-    const T* wj = w + static_cast<std::size_t>(j) * NB * L;
-    for (int b = 0; b < NB; ++b) acc[b] = xsimd::fma(B::load_aligned(wj + b * L), xj, acc[b]);
+    const W* wj = w + static_cast<std::size_t>(j) * NB * L;
+    for (int b = 0; b < NB; ++b) acc[b] = xsimd::fma(load_weights<T, W>(wj + b * L), xj, acc[b]);
   }
   for (int b = 0; b < NB; ++b) acc[b].store_aligned(y + b * L);
 }
 }  // namespace detail
 
 // y[0 .. padded(rows)) = W x + bias. bias (padded, aligned) may be null. y must be aligned.
-template <typename T>
-inline void gemv(const PanelMatrix<T>& W, const T* x, const T* bias, T* y) noexcept {
+template <typename T, typename Wt>
+inline void gemv(const PanelMatrix<T, Wt>& W, const T* x, const T* bias, T* y) noexcept {
+  static_assert(kPanelBatches == 8, "the tail switch below handles up to 7 batches");
   constexpr int L = kLanes<T>;
   constexpr int P = kPanelBatches * L;
   const int prows = padded<T>(W.rows);
-  const T* w = W.data;
+  const Wt* w = W.data;
   int r0 = 0;
   for (; r0 + P <= prows; r0 += P, w += static_cast<std::size_t>(P) * W.cols)
-    detail::panel_gemv<T, kPanelBatches>(w, W.cols, x, bias ? bias + r0 : nullptr, y + r0);
+    detail::panel_gemv<T, Wt, kPanelBatches>(w, W.cols, x, bias ? bias + r0 : nullptr, y + r0);
   const int rest = (prows - r0) / L;  // batches in the last, shorter panel
   const T* b = bias ? bias + r0 : nullptr;
   switch (rest) {  // compile-time batch counts keep the accumulators in registers
     case 0: break;
-    case 1: detail::panel_gemv<T, 1>(w, W.cols, x, b, y + r0); break;
-    case 2: detail::panel_gemv<T, 2>(w, W.cols, x, b, y + r0); break;
-    case 3: detail::panel_gemv<T, 3>(w, W.cols, x, b, y + r0); break;
-    case 4: detail::panel_gemv<T, 4>(w, W.cols, x, b, y + r0); break;
-    case 5: detail::panel_gemv<T, 5>(w, W.cols, x, b, y + r0); break;
-    case 6: detail::panel_gemv<T, 6>(w, W.cols, x, b, y + r0); break;
-    default: detail::panel_gemv<T, 7>(w, W.cols, x, b, y + r0); break;
+    case 1: detail::panel_gemv<T, Wt, 1>(w, W.cols, x, b, y + r0); break;
+    case 2: detail::panel_gemv<T, Wt, 2>(w, W.cols, x, b, y + r0); break;
+    case 3: detail::panel_gemv<T, Wt, 3>(w, W.cols, x, b, y + r0); break;
+    case 4: detail::panel_gemv<T, Wt, 4>(w, W.cols, x, b, y + r0); break;
+    case 5: detail::panel_gemv<T, Wt, 5>(w, W.cols, x, b, y + r0); break;
+    case 6: detail::panel_gemv<T, Wt, 6>(w, W.cols, x, b, y + r0); break;
+    default: detail::panel_gemv<T, Wt, 7>(w, W.cols, x, b, y + r0); break;
   }
 }
 

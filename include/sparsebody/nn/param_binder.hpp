@@ -3,7 +3,9 @@
 // The WeightStore is allocated once, at load, and is immutable afterwards; layers keep only
 // pointers into it, so one store can serve any number of network instances and threads.
 #pragma once
+#include <cmath>
 #include <memory>
+#include <type_traits>
 #include <string>
 #include <vector>
 
@@ -16,10 +18,12 @@ namespace sparsebody::nn {
 template <typename T>
 class WeightStore {
  public:
-  T* allocate(std::size_t n) {
-    buffers_.emplace_back(n);
-    bytes_ += n * sizeof(T);
-    return buffers_.back().data();
+  // n zeroed, cache-line aligned values of type U (T, or f16 for half-precision weights).
+  template <typename U = T>
+  U* allocate(std::size_t n) {
+    buffers_.emplace_back((n * sizeof(U) + sizeof(T) - 1) / sizeof(T));
+    bytes_ += n * sizeof(U);
+    return reinterpret_cast<U*>(buffers_.back().data());
   }
   // Bytes of parameters (including SIMD padding) one forward pass streams.
   std::size_t bytes() const noexcept { return bytes_; }
@@ -35,14 +39,21 @@ class ParamBinder {
   ParamBinder(io::TensorTable& table, WeightStore<T>& store) : table_(table), store_(store) {}
 
   // Tensor `name` of shape [rows, cols] packed as panels with `packed_rows` rows; row r goes to
-  // row_map[r] (identity when null). Padding rows are zero.
-  PanelMatrix<T> matrix(const std::string& name, int rows, int cols, int packed_rows = -1,
-                        const int* row_map = nullptr) {
+  // row_map[r] (identity when null). Padding rows are zero. W: stored type (T, or f16).
+  template <typename W = T>
+  PanelMatrix<T, W> matrix(const std::string& name, int rows, int cols, int packed_rows = -1,
+                           const int* row_map = nullptr) {
     if (packed_rows < 0) packed_rows = rows;
     const io::Tensor& t = table_.take(name, {rows, cols});
-    T* dst = store_.allocate(panel_storage<T>(packed_rows, cols));
-    pack_panels<T>(t.values.data(), rows, cols, dst, packed_rows, row_map);
-    return PanelMatrix<T>{dst, packed_rows, cols};
+    if constexpr (std::is_same_v<W, f16>) {
+      for (std::size_t i = 0; i < t.values.size(); ++i)
+        if (std::abs(t.values[i]) > kF16Max)
+          throw LoadError(table_.source(), "tensor '" + name + "': value " + std::to_string(t.values[i]) + " at flat index " +
+                                               std::to_string(i) + " does not fit float16 weight storage");
+    }
+    W* dst = store_.template allocate<W>(panel_storage<T>(packed_rows, cols));
+    pack_panels<T, W>(t.values.data(), rows, cols, dst, packed_rows, row_map);
+    return PanelMatrix<T, W>{dst, packed_rows, cols};
   }
 
   // Tensor `name` of shape [n] into an aligned, zero-padded array of `packed_n` values.
