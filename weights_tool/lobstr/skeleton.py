@@ -4,9 +4,9 @@ The standard skeleton is the one of the training data (Bandai Namco, 21 joints f
 skeletons (e.g. CMU) are mapped onto it by joint names (ROLE_NAMES) and scaled by leg length.
 
 Tracker frames (the convention shared with C++ features/calibration.hpp):
-  pelvis   position of the hips joint; orientation F_hips = the hips frame built from the skeleton
-           geometry: X = left (left minus right thigh root), Y = up (hips -> first spine joint),
-           Z = X x Y = forward. It is rigid with the hips joint, so it is exact on any skeleton.
+  pelvis   position of the hips joint; orientation F_hips = the frame built from joint positions:
+           Y = up (hips -> first spine joint), X = left (left minus right thigh root, made
+           orthogonal), Z = X x Y = forward. On the standard skeleton it is rigid with the hips.
   head, hands  joint position; orientation Q_k(t) o_k with o_k = Q_k(t0)^T Yaw(F_hips(t0)): at the
            calibration frame t0 every tracker points along the body's facing frame (paper §4.2: the
            rotational offsets are found in a calibration pose).
@@ -64,15 +64,36 @@ def leg_length(b, roles):
     return float(np.linalg.norm(b.offsets[roles["leg_l"]]) + np.linalg.norm(b.offsets[roles["foot_l"]]))
 
 
+def spine_base(b, roles):
+    """The joint that gives the pelvis its up axis: the lowest joint on the way from the hips to the
+    head whose rest position is away from the hips (> 5 % of the leg; CMU's LowerBack sits on the hips)."""
+    chain, j = [], roles["head"]
+    while j != roles["hips"]:
+        if j < 0:
+            raise ValueError("the head is not below the hips")
+        chain.append(j)
+        j = b.parents[j]
+    min_len = 0.05 * leg_length(b, roles)
+    for j in reversed(chain):
+        if np.linalg.norm(rest_offset(b, j, roles["hips"])) > min_len:
+            return j
+    return chain[0]
+
+
+def rest_offset(b, j, ancestor):
+    """Rest position of joint j relative to `ancestor` (sum of offsets along the chain)."""
+    v = np.zeros(3)
+    while j != ancestor:
+        v = v + np.asarray(b.offsets[j])
+        j = b.parents[j]
+    return v
+
+
 def hips_local_frame(b, roles):
     """F_local: the tracker frame of the pelvis in hips-local coordinates (X left, Y up, Z forward)."""
     h = roles["hips"]
-    kids = [j for j, p in enumerate(b.parents) if p == h and j not in (roles["upleg_l"], roles["upleg_r"])]
-    if "spine" in roles and b.parents[roles["spine"]] == h:
-        up = b.offsets[roles["spine"]]
-    else:
-        up = b.offsets[kids[0]]
-    left = b.offsets[roles["upleg_l"]] - b.offsets[roles["upleg_r"]]
+    up = rest_offset(b, spine_base(b, roles), h)
+    left = rest_offset(b, roles["upleg_l"], h) - rest_offset(b, roles["upleg_r"], h)
     return frame_from(up, left)
 
 
@@ -121,7 +142,10 @@ class Clip:
         """Synthetic tracker world poses: positions [F, 4, 3] and rotations [F, 4, 3, 3] in the order
         head, hand_l, hand_r, pelvis (features.TRACKER_ORDER)."""
         r = self.roles
-        Fh = self.Rw[:, r["hips"]] @ self.F_local
+        # pelvis frame from joint positions (rigid with the hips when the thighs hang off the hips)
+        up = self.pw[:, spine_base(self.bvh, r)] - self.pw[:, r["hips"]]
+        left = self.pw[:, r["upleg_l"]] - self.pw[:, r["upleg_r"]]
+        Fh = np.stack([frame_from(u, l) for u, l in zip(up, left)])
         yaw0 = yaw_frame(Fh[t0, :, 2])
         P = np.empty((self.frames, 4, 3))
         Q = np.empty((self.frames, 4, 3, 3))

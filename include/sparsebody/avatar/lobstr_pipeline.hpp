@@ -1,0 +1,331 @@
+// The LoBSTr avatar pipeline (Yang et al., Eurographics 2021): tracker frames in, a full-body pose
+// on the standard skeleton out.
+//
+//   TrackerFrame (any rate) -> Resampler (model rate) -> TrackerSanitizer (bad input)
+//     -> Calibration (offsets, height scale) -> LoBSTrFeatures (37) -> LoBSTrNet (GRU)
+//     -> lower body: 8 local rotations (6D) under the hips placed by the pelvis tracker
+//     -> contacts -> FootLock + leg IK (§3.4.1);  upper body: spine/head aim + two-bone arm IK.
+//
+// Run modes (Config::mode):
+//   Streaming  one GRU step per frame with the hidden state carried over (cost: 1 step/frame).
+//              Training used chunks of 64 frames with a loss on every frame, so long runs are in
+//              distribution only as far as the GRU generalises; the state is reset after gaps.
+//   Window     each frame re-runs the last N = 1 s of features from a zero state, exactly as in
+//              the paper's training and inference (§3.2, Δi = 1 s); N times the cost.
+// Per frame: no allocation, no exception, no lock. Everything is sized at construction.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sparsebody/features/calibration.hpp"
+#include "sparsebody/features/lobstr_features.hpp"
+#include "sparsebody/networks/lobstr_net.hpp"
+#include "sparsebody/nn/network.hpp"
+#include "sparsebody/pose/body_pose.hpp"
+#include "sparsebody/pose/contact.hpp"
+#include "sparsebody/pose/ik.hpp"
+#include "sparsebody/pose/joint_map.hpp"
+#include "sparsebody/pose/rotation6d.hpp"
+#include "sparsebody/trackers/resampler.hpp"
+#include "sparsebody/trackers/sanitizer.hpp"
+
+namespace sparsebody::avatar {
+
+enum class RunMode { Streaming, Window };
+
+struct LoBSTrConfig {
+  RunMode mode = RunMode::Streaming;
+  int window = 0;                  // window-mode frames; 0: 1 s at the model rate
+  double contact_threshold = 0.5;  // P(contact) above which a foot is in contact
+  bool contact_ik = true;          // §3.4.1 post-processing
+  bool upper_body_ik = true;
+  trackers::SanitizerConfig sanitizer{};
+};
+
+// What the weights file's meta says about the pipeline (see weights_tool/lobstr/export.py).
+struct LoBSTrMeta {
+  pose::Skeleton skeleton;      // standard skeleton, metres
+  int lower[8] = {};            // joint indices of the 8 predicted joints
+  double frame_rate = 30;
+  double standing_hips_height = 0.9, standing_head_height = 1.38;
+
+  static LoBSTrMeta from(const io::ModelInfo& info) {
+    const std::string& src = info.source;
+    LoBSTrMeta m;
+    const auto& j = info.meta;
+    if (!j.contains("skeleton")) throw LoadError(src, "meta.skeleton: missing (not a LoBSTr pipeline file)");
+    m.skeleton = pose::Skeleton::from_json(j["skeleton"], src);
+    if (!j.contains("lower_body_joints") || !j["lower_body_joints"].is_array() || j["lower_body_joints"].size() != 8)
+      throw LoadError(src, "meta.lower_body_joints: expected 8 joint names");
+    for (int i = 0; i < 8; ++i) {
+      const auto& n = j["lower_body_joints"][i];
+      m.lower[i] = n.is_string() ? m.skeleton.find(n.get<std::string>()) : -1;
+      if (m.lower[i] < 0) throw LoadError(src, "meta.lower_body_joints[" + std::to_string(i) + "]: not a skeleton joint");
+    }
+    if (info.frame_rate > 0) m.frame_rate = info.frame_rate;
+    if (info.rotation_representation != "6d" || info.rotation_layout != "columns" ||
+        j["rotation"].value("columns", nlohmann::json::array()) != nlohmann::json::array({2, 1}))
+      throw LoadError(src, "meta.rotation: expected {\"representation\": \"6d\", \"layout\": \"columns\", \"columns\": [2, 1]}");
+    m.standing_hips_height = j.value("standing_hips_height", m.standing_hips_height);
+    m.standing_head_height = j.value("standing_head_height", m.standing_head_height);
+    return m;
+  }
+};
+
+template <typename T = float, int Hidden = 256, int Latent = 128>
+class LoBSTrPipeline {
+ public:
+  using Net = networks::LoBSTrNet<T, Hidden, Latent>;
+  using Weights = nn::NetworkWeights<Net>;
+  static constexpr int kFeatures = features::kLoBSTrFeatureCount;
+
+  static std::shared_ptr<const Weights> load(const std::string& path) { return Weights::load(path, networks::kLoBSTrKind); }
+
+  explicit LoBSTrPipeline(std::shared_ptr<const Weights> w, LoBSTrConfig cfg = {})
+      : cfg_(cfg), meta_(LoBSTrMeta::from(w->info())), net_(w), sanitizer_(cfg.sanitizer),
+        resampler_(meta_.frame_rate) {
+    const pose::Skeleton& s = meta_.skeleton;
+    map_ = pose::JointMap::from_names(s, w->info().source);
+    F_hips_T_ = pose::hips_tracker_frame(s, map_).transpose();
+    pose_.resize(s.size());
+    world_.resize(s.size());
+    window_ = cfg_.window > 0 ? cfg_.window : static_cast<int>(meta_.frame_rate + 0.5);
+    if (cfg_.mode == RunMode::Window) ring_.assign(static_cast<std::size_t>(window_) * kFeatures, T(0));
+    find_upper_body();
+    // the contact head's classes per foot: [no contact, contact]
+    for (int j = 0; j < s.size(); ++j) pose_.local[j] = Eigen::Quaterniond::Identity();
+    reset();
+  }
+
+  // --- calibration -------------------------------------------------------------------------
+  void set_calibration(const features::Calibration& c) noexcept { calib_ = c; }
+  const features::Calibration& calibration() const noexcept { return calib_; }
+  // T-pose calibration from one frame (paper §4.2); false when the frame cannot be used.
+  bool calibrate(const trackers::TrackerFrame& tpose) noexcept {
+    return calib_.from_tpose(tpose, meta_.standing_hips_height, meta_.standing_head_height);
+  }
+
+  // --- running ------------------------------------------------------------------------------
+  // Feeds one input frame at any rate; runs one model step per model tick it completes.
+  // Returns the number of steps run (0 when the frame falls between ticks).
+  int push(const trackers::TrackerFrame& f) noexcept {
+    return resampler_.push(f, [this](const trackers::TrackerFrame& tick, bool gap) { step(tick, gap); });
+  }
+
+  // One model frame (the caller does the resampling). `restart`: state reset before this frame.
+  void step(const trackers::TrackerFrame& f, bool restart = false) noexcept {
+    const trackers::SanitizedFrame& s = sanitizer_.process(f, 1.0 / meta_.frame_rate);
+    if (restart || s.reset) reset_state();
+    ++frames_;
+    if (!s.usable) { valid_output_ = false; return; }
+    calib_.apply(s.pose, cal_);
+    feat_.compute(cal_, x_);
+    const T* y = run_network();
+    for (int i = 0; i < Net::out_size; ++i) y_[i] = y[i];
+    decode_lower_body();
+    if (cfg_.upper_body_ik) solve_upper_body();
+    pose::forward_kinematics(meta_.skeleton, pose_, world_);
+    contacts_and_legs();
+    valid_output_ = true;
+  }
+
+  void reset() noexcept {
+    reset_state();
+    sanitizer_.reset();
+    resampler_.reset();
+    frames_ = 0;
+    valid_output_ = false;
+  }
+
+  // --- results ------------------------------------------------------------------------------
+  // The pose on the standard skeleton in its scale (metres); multiply positions and offsets by
+  // user_scale() for the user's size. Valid when has_output().
+  const pose::BodyPose& pose() const noexcept { return pose_; }
+  const pose::WorldPose& world() const noexcept { return world_; }
+  bool has_output() const noexcept { return valid_output_; }
+  double user_scale() const noexcept { return 1.0 / calib_.scale; }
+  const pose::Skeleton& skeleton() const noexcept { return meta_.skeleton; }
+  const pose::JointMap& joint_map() const noexcept { return map_; }
+  const LoBSTrMeta& meta() const noexcept { return meta_; }
+  const T* features() const noexcept { return x_; }
+  const T* network_output() const noexcept { return y_; }  // [48 pose 6D | 2 left | 2 right]
+  double contact_probability(int foot) const noexcept { return y_[48 + 2 * foot + 1]; }
+  bool contact(int foot) const noexcept { return contact_probability(foot) > cfg_.contact_threshold; }
+  bool foot_locked(int foot) const noexcept { return lock_[foot].state() != pose::FootLock::State::Free; }
+  long long frames() const noexcept { return frames_; }
+  int window() const noexcept { return window_; }
+  RunMode mode() const noexcept { return cfg_.mode; }
+
+ private:
+  void reset_state() noexcept {
+    net_.reset();
+    feat_.reset();
+    lock_[0].reset();
+    lock_[1].reset();
+    filled_ = 0;
+    head_ = 0;
+  }
+
+  const T* run_network() noexcept {
+    if (cfg_.mode == RunMode::Streaming) return net_.step(x_);
+    // Window: append x to the ring, then replay the last N frames from a zero state.
+    std::copy(x_, x_ + kFeatures, ring_.data() + static_cast<std::size_t>(head_) * kFeatures);
+    head_ = (head_ + 1) % window_;
+    if (filled_ < window_) ++filled_;
+    net_.reset();
+    const T* y = nullptr;
+    const int start = (head_ - filled_ + window_) % window_;
+    for (int i = 0; i < filled_; ++i) y = net_.step(ring_.data() + static_cast<std::size_t>((start + i) % window_) * kFeatures);
+    return y;
+  }
+
+  // Hips from the pelvis tracker (W_hips = P F_hips^T, p_hips = p_pelvis); the 8 lower-body joints
+  // from the network's 6D output.
+  void decode_lower_body() noexcept {
+    const trackers::PoseD& pel = cal_[3];
+    pose_.root_position = pel.position;
+    pose_.local[0] = Eigen::Quaterniond(pel.orientation.toRotationMatrix() * F_hips_T_).normalized();
+    for (int i = 0; i < 8; ++i) pose_.local[meta_.lower[i]] = Eigen::Quaterniond(pose::from6d(y_ + 6 * i));
+  }
+
+  void find_upper_body() {
+    const pose::Skeleton& s = meta_.skeleton;
+    // spine chain: joints from the hips' spine child up to the head
+    const int head = map_[pose::Role::Head];
+    int j = head;
+    spine_n_ = 0;
+    while (j > 0 && spine_n_ < 8) { spine_rev_[spine_n_++] = j; j = s.parents[j]; }
+    // spine_rev_ = head, neck, chest, ..., first spine joint (child of the hips)
+    for (int side = 0; side < 2; ++side) {
+      const int hand = map_[side == 0 ? pose::Role::HandL : pose::Role::HandR];
+      arm_[side][2] = hand;
+      arm_[side][1] = s.parents[hand];
+      arm_[side][0] = s.parents[arm_[side][1]];
+      arm_[side][3] = s.parents[arm_[side][0]];  // clavicle (or the chest for 3-joint arms)
+    }
+    chest_ = s.parents[arm_[0][3]];
+    if (arm_[0][3] == chest_ || chest_ < 0) chest_ = arm_[0][3];
+    lateral_local_ = s.offsets[arm_[0][3]] - s.offsets[arm_[1][3]];
+    if (lateral_local_.norm() < 1e-6) lateral_local_ = Eigen::Vector3d::UnitZ();
+  }
+
+  // Bone direction of joint j in its own frame (towards its first child; a leaf continues its parent's bone).
+  Eigen::Vector3d bone_local(int j) const noexcept {
+    const pose::Skeleton& s = meta_.skeleton;
+    const int c = s.first_child(j);
+    const Eigen::Vector3d d = c >= 0 ? s.offsets[c] : s.offsets[j];
+    return d.norm() > 1e-9 ? Eigen::Vector3d(d.normalized()) : Eigen::Vector3d::UnitX();
+  }
+
+  // Upper body from the trackers: the spine chain straight from its base towards the head tracker
+  // (twist from the body's left axis), the head from the headset's orientation, the clavicles
+  // outwards, and two-bone IK from the shoulders to the hand trackers with elbows down and back.
+  void solve_upper_body() noexcept {
+    const pose::Skeleton& s = meta_.skeleton;
+    pose::forward_kinematics(s, pose_, world_);  // hips and legs placed
+    const Eigen::Matrix3d H = cal_[0].orientation.toRotationMatrix();
+    const Eigen::Matrix3d Wh = pose_.local[0].toRotationMatrix();
+    const Eigen::Vector3d left_body = cal_[3].orientation.toRotationMatrix().col(0);
+    const Eigen::Vector3d up_body = cal_[3].orientation.toRotationMatrix().col(1);
+    const int base = spine_rev_[spine_n_ - 1];
+    const Eigen::Vector3d base_pos = world_.position[0] + Wh * s.offsets[base];
+    Eigen::Vector3d dir = cal_[0].position - base_pos;
+    if (dir.norm() < 1e-6) dir = up_body;
+    dir.normalize();
+    // world rotations, parents first
+    Eigen::Quaterniond parent_w(Wh);
+    for (int i = spine_n_ - 1; i >= 0; --i) {
+      const int j = spine_rev_[i];
+      Eigen::Quaterniond w;
+      if (i == 0) {  // head: its bone axis along the headset's up, lateral along its left
+        w = pose::aim(bone_local(j), lateral_local_, H.col(1), H.col(0));
+      } else {
+        w = pose::aim(bone_local(j), lateral_local_, dir, left_body);
+      }
+      pose_.local[j] = (parent_w.conjugate() * w).normalized();
+      parent_w = w;
+    }
+    pose::forward_kinematics(s, pose_, world_);
+    const Eigen::Vector3d fwd_body = cal_[3].orientation.toRotationMatrix().col(2);
+    for (int side = 0; side < 2; ++side) {
+      const int clav = arm_[side][3], up = arm_[side][0], lo = arm_[side][1], hand = arm_[side][2];
+      const double sgn = side == 0 ? 1.0 : -1.0;
+      const Eigen::Quaterniond Wc_par = world_.rotation[s.parents[clav]];
+      if (clav != chest_) {
+        const Eigen::Quaterniond w = pose::aim(bone_local(clav), Eigen::Vector3d::UnitY(), sgn * left_body, fwd_body);
+        pose_.local[clav] = (Wc_par.conjugate() * w).normalized();
+      }
+      pose::forward_kinematics(s, pose_, world_);
+      const Eigen::Vector3d a = world_.position[up], b = world_.position[lo], c = world_.position[hand];
+      const Eigen::Vector3d pole = -up_body - 0.5 * fwd_body + 0.2 * sgn * left_body;
+      Eigen::Vector3d b2, c2;
+      pose::two_bone(a, b, c, cal_[1 + side].position, pole, b2, c2);
+      const Eigen::Quaterniond Wu = pose::aim(bone_local(up), Eigen::Vector3d::UnitY(), b2 - a, fwd_body);
+      const Eigen::Quaterniond Wl = pose::aim(bone_local(lo), Eigen::Vector3d::UnitY(), c2 - b2, fwd_body);
+      const Eigen::Matrix3d Ht = cal_[1 + side].orientation.toRotationMatrix();
+      const Eigen::Quaterniond Wd = pose::aim(bone_local(hand), Eigen::Vector3d::UnitY(), sgn * Ht.col(0), Ht.col(1));
+      pose_.local[up] = (world_.rotation[clav].conjugate() * Wu).normalized();
+      pose_.local[lo] = (Wu.conjugate() * Wl).normalized();
+      pose_.local[hand] = (Wl.conjugate() * Wd).normalized();
+    }
+  }
+
+  // Contacts from the network, foot locks, and leg IK keeping each foot's world orientation.
+  void contacts_and_legs() noexcept {
+    if (!cfg_.contact_ik) return;
+    const pose::Skeleton& s = meta_.skeleton;
+    bool changed = false;
+    for (int foot = 0; foot < 2; ++foot) {
+      const int* L = meta_.lower + 4 * foot;  // upper leg, lower leg, foot, toes
+      const int ul = L[0], ll = L[1], ft = L[2], toe = L[3];
+      const Eigen::Vector3d hip = world_.position[ul];
+      const double reach = 1.02 * (s.offsets[ll].norm() + s.offsets[ft].norm()) + s.offsets[toe].norm();
+      Eigen::Vector3d target;
+      if (!lock_[foot].update(contact(foot), world_.position[toe], hip, reach, target)) continue;
+      // ankle target keeps the foot's world orientation: ankle = target - (toe - ankle)
+      const Eigen::Vector3d ankle_t = target - (world_.position[toe] - world_.position[ft]);
+      const Eigen::Vector3d a = world_.position[ul], b = world_.position[ll], c = world_.position[ft];
+      const Eigen::Vector3d fwd = cal_[3].orientation.toRotationMatrix().col(2);
+      const Eigen::Vector3d pole = (b - a) - (b - a).dot((c - a).normalized()) * (c - a).normalized() + 0.05 * fwd;
+      Eigen::Vector3d b2, c2;
+      pose::two_bone(a, b, c, ankle_t, pole, b2, c2);
+      const Eigen::Quaterniond Wu = pose::swing(b - a, b2 - a) * world_.rotation[ul];
+      const Eigen::Quaterniond Wl_tmp = pose::swing(b - a, b2 - a) * world_.rotation[ll];
+      const Eigen::Vector3d c_after = b2 + pose::swing(b - a, b2 - a) * (c - b);
+      const Eigen::Quaterniond Wl = pose::swing(c_after - b2, c2 - b2) * Wl_tmp;
+      const Eigen::Quaterniond Wf = world_.rotation[ft];
+      pose_.local[ul] = (world_.rotation[s.parents[ul]].conjugate() * Wu).normalized();
+      pose_.local[ll] = (Wu.conjugate() * Wl).normalized();
+      pose_.local[ft] = (Wl.conjugate() * Wf).normalized();
+      changed = true;
+    }
+    if (changed) pose::forward_kinematics(s, pose_, world_);
+  }
+
+  LoBSTrConfig cfg_;
+  LoBSTrMeta meta_;
+  nn::Network<Net> net_;
+  trackers::TrackerSanitizer sanitizer_;
+  trackers::Resampler resampler_;
+  features::Calibration calib_;
+  features::LoBSTrFeatures feat_;
+  pose::JointMap map_{};
+  Eigen::Matrix3d F_hips_T_;
+  std::array<trackers::PoseD, trackers::kTrackerCount> cal_{};
+  T x_[kFeatures] = {};
+  T y_[Net::out_size] = {};
+  pose::BodyPose pose_;
+  pose::WorldPose world_;
+  pose::FootLock lock_[2];
+  std::vector<T> ring_;
+  int window_ = 30, filled_ = 0, head_ = 0;
+  int spine_rev_[8] = {}, spine_n_ = 0;
+  int arm_[2][4] = {};
+  int chest_ = 0;
+  Eigen::Vector3d lateral_local_ = Eigen::Vector3d::UnitZ();
+  long long frames_ = 0;
+  bool valid_output_ = false;
+};
+
+}  // namespace sparsebody::avatar

@@ -1,0 +1,90 @@
+// Heading frame h = (p_x, p_z, theta_y) (Neural3Points, SCA 2022, §4): a frame on the floor at
+// (p_x, 0, p_z), Y up, turned by theta_y about Y so that its Z axis is the character's facing
+// direction. It moves horizontally with the character's root.
+//
+//   R_y(theta) = [ c 0 s ]      maps the frame's Z axis (0, 0, 1) to (sin theta, 0, cos theta)
+//                [ 0 1 0 ]
+//                [-s 0 c ]
+//   h1 (x) h2      = (p1 + R_y(theta1) p2, wrap(theta1 + theta2))     composition (paper: (x))
+//   inv(h)         = (-R_y(-theta) p, -theta)                          inverse
+//   inv(h) (x) p   = R_y(-theta) (p - (p_x, 0, p_z))                   a world point into the frame
+//   inv(h) (x) v   = R_y(-theta) v                                     a world vector into the frame
+//   inv(h) (x) R   = R_y(-theta) R                                     a world rotation into the frame
+//   dh = inv(h_{t-1}) (x) h_t, so that h_t = h_{t-1} (x) dh             heading change (z's delta h)
+// theta is kept in (-pi, pi]. Python twin: weights_tool/n3p/layout.py (must stay identical: the
+// parity test runs both over whole clips).
+#pragma once
+#include <cmath>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace sparsebody::features {
+
+// theta wrapped to (-pi, pi] as atan2(sin, cos) (the same expression as the Python side).
+inline double wrap_angle(double a) noexcept { return std::atan2(std::sin(a), std::cos(a)); }
+
+struct HeadingFrame {
+  double px = 0, pz = 0, theta = 0;  // (p_x, p_z, theta_y)
+
+  static HeadingFrame identity() noexcept { return {}; }
+
+  // From a floor position (its y is ignored) and a forward direction whose ground projection gives
+  // theta = atan2(f_x, f_z). A forward along Y (no ground projection) gives theta = 0.
+  static HeadingFrame from(const Eigen::Vector3d& position, const Eigen::Vector3d& forward) noexcept {
+    const double t = (std::abs(forward.x()) + std::abs(forward.z()) > 1e-12) ? std::atan2(forward.x(), forward.z()) : 0.0;
+    return {position.x(), position.z(), t};
+  }
+
+  // R_y(theta).
+  Eigen::Matrix3d rotation() const noexcept {
+    const double c = std::cos(theta), s = std::sin(theta);
+    Eigen::Matrix3d R;
+    R << c, 0, s, 0, 1, 0, -s, 0, c;
+    return R;
+  }
+
+  // h (x) d: composition, d expressed in this frame.
+  HeadingFrame operator*(const HeadingFrame& d) const noexcept {
+    const double c = std::cos(theta), s = std::sin(theta);
+    return {px + (c * d.px + s * d.pz), pz + (-s * d.px + c * d.pz), wrap_angle(theta + d.theta)};
+  }
+  // inv(h).
+  HeadingFrame inverse() const noexcept {
+    const double c = std::cos(theta), s = std::sin(theta);
+    return {-(c * px - s * pz), -(s * px + c * pz), wrap_angle(-theta)};
+  }
+  // inv(a) (x) b: the heading change from a to b, expressed in a.
+  static HeadingFrame delta(const HeadingFrame& a, const HeadingFrame& b) noexcept {
+    const double c = std::cos(a.theta), s = std::sin(a.theta);
+    const double dx = b.px - a.px, dz = b.pz - a.pz;
+    return {c * dx - s * dz, s * dx + c * dz, wrap_angle(b.theta - a.theta)};
+  }
+
+  // inv(h) (x) v for a vector: R_y(-theta) v.
+  Eigen::Vector3d vector_to_local(const Eigen::Vector3d& v) const noexcept {
+    const double c = std::cos(theta), s = std::sin(theta);
+    return {c * v.x() - s * v.z(), v.y(), s * v.x() + c * v.z()};
+  }
+  // h (x) v for a vector: R_y(theta) v.
+  Eigen::Vector3d vector_to_world(const Eigen::Vector3d& v) const noexcept {
+    const double c = std::cos(theta), s = std::sin(theta);
+    return {c * v.x() + s * v.z(), v.y(), -s * v.x() + c * v.z()};
+  }
+  // inv(h) (x) p for a point.
+  Eigen::Vector3d point_to_local(const Eigen::Vector3d& p) const noexcept {
+    return vector_to_local(Eigen::Vector3d(p.x() - px, p.y(), p.z() - pz));
+  }
+  // h (x) p for a point.
+  Eigen::Vector3d point_to_world(const Eigen::Vector3d& p) const noexcept {
+    const Eigen::Vector3d w = vector_to_world(p);
+    return {w.x() + px, w.y(), w.z() + pz};
+  }
+  // Rotations: R_y(-theta) R and R_y(theta) R.
+  Eigen::Matrix3d rotation_to_local(const Eigen::Matrix3d& R) const noexcept { return rotation().transpose() * R; }
+  Eigen::Matrix3d rotation_to_world(const Eigen::Matrix3d& R) const noexcept { return rotation() * R; }
+
+  bool finite() const noexcept { return std::isfinite(px) && std::isfinite(pz) && std::isfinite(theta); }
+};
+
+}  // namespace sparsebody::features
