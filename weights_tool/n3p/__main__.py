@@ -1,0 +1,67 @@
+"""Command line: /usr/bin/python3 -m weights_tool.n3p {dataset,train,export,evaluate,golden} ...
+
+Reproduce the default weights (examples/weights/n3p_*.json), from the repository root:
+  python3 -m weights_tool.n3p dataset ../shared/data/bandai-namco/train.tar.xz-unpacked-dir /tmp/n3p/train.npz --every 2
+  python3 -m weights_tool.n3p dataset <validation dir> /tmp/n3p/val.npz
+  python3 -m weights_tool.n3p train --train /tmp/n3p/train.npz --val /tmp/n3p/val.npz --out /tmp/n3p/n3p.pt
+  python3 -m weights_tool.n3p export /tmp/n3p/n3p.pt /tmp/n3p/train.npz examples/weights/n3p
+  python3 -m weights_tool.n3p evaluate examples/weights/n3p /tmp/n3p/val.npz
+"""
+import argparse
+import json
+import sys
+
+
+def main(argv=None):
+    argv = sys.argv[1:] if argv is None else argv
+    if not argv or argv[0] in ("-h", "--help"):
+        print(__doc__)
+        return 0
+    cmd, rest = argv[0], argv[1:]
+    if cmd == "train":
+        from . import train
+        return train.main(rest)
+    p = argparse.ArgumentParser(prog=f"weights_tool.n3p {cmd}")
+    if cmd == "dataset":
+        from . import dataset
+        p.add_argument("data_dir")
+        p.add_argument("out")
+        p.add_argument("--every", type=int, default=1)
+        p.add_argument("--limit", type=int, default=None)
+        a = p.parse_args(rest)
+        dataset.build(a.data_dir, a.out, a.every, a.limit)
+    elif cmd == "export":
+        from . import export, train
+        from .dataset import Data
+        p.add_argument("checkpoint")
+        p.add_argument("train_npz", help="training arrays (for the default start state)")
+        p.add_argument("prefix")
+        a = p.parse_args(rest)
+        nets, info = train.load(a.checkpoint)
+        print("\n".join(export.export_nets(nets, a.prefix, export.initial_state(Data(a.train_npz)), info)))
+    elif cmd == "evaluate":
+        from . import evaluate, weights
+        from .dataset import Data
+        p.add_argument("prefix", help="weights prefix (…/n3p for n3p_signal.json, n3p_lower.json, n3p_upper.json)")
+        p.add_argument("val_npz")
+        p.add_argument("--limit", type=int, default=None)
+        p.add_argument("--json", default=None, help="also write the figures here")
+        a = p.parse_args(rest)
+        nets, init = weights.load(a.prefix)
+        r = evaluate.report(nets, Data(a.val_npz), init, a.limit)
+        if a.json:
+            with open(a.json, "w") as f:
+                json.dump(r, f, indent=1)
+    elif cmd == "golden":
+        from . import golden
+        p.add_argument("out_dir")
+        a = p.parse_args(rest)
+        print(golden.write(a.out_dir))
+    else:
+        print(f"unknown command {cmd!r}\n{__doc__}")
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
