@@ -43,15 +43,7 @@ using N3PPolicy = networks::N3PPolicyNet<float, 868, 72>;
 using QuestSim = networks::QuestSimPolicyNet<float, 475, 33>;
 
 io::TensorTable lobstr_table(int H, int latent, bool gru_only = false) {
-  std::mt19937 rng(1);
-  io::TensorTable t("random");
-  add_gru(t, "gru.", 37, H, 1, rng);
-  if (!gru_only) {
-    add_linear(t, "latent.", H, latent, rng);
-    add_linear(t, "pose.", latent, 48, rng);
-    add_linear(t, "contact.", latent, 4, rng);
-  }
-  return t;
+  return sparsebody_test::random_lobstr_table(H, latent, 1, gru_only);
 }
 io::TensorTable n3p_table(int in, int H, int out) {
   std::mt19937 rng(2);
@@ -76,11 +68,7 @@ std::size_t parameter_bytes(const io::TensorTable& t) {
 
 template <class Net>
 std::shared_ptr<const nn::NetworkWeights<Net>> make_weights(io::TensorTable t, const char* kind) {
-  io::WeightsDocument doc{io::ModelInfo{}, std::move(t)};
-  doc.info.kind = kind;
-  doc.info.input_size = Net::in_size;
-  doc.info.output_size = Net::out_size;
-  return nn::NetworkWeights<Net>::from_document(std::move(doc), kind);
+  return sparsebody_test::weights_from_table<Net>(std::move(t), kind);
 }
 
 template <class Net>

@@ -4,6 +4,8 @@
 #include <string>
 
 #include "sparsebody/io/tensor_table.hpp"
+#include "sparsebody/io/weights_json.hpp"
+#include "sparsebody/nn/network.hpp"
 
 namespace sparsebody_test {
 
@@ -33,6 +35,31 @@ inline void add_linear(sparsebody::io::TensorTable& t, const std::string& prefix
                        double scale = 0.3) {
   add_random(t, prefix + "weight", {out, in}, rng, scale);
   add_random(t, prefix + "bias", {out}, rng, scale);
+}
+
+// Tensors of a LoBSTr network (weights_tool nets.LoBSTrNet) with hidden H and latent L; only the GRU
+// (under "gru.") when gru_only.
+inline sparsebody::io::TensorTable random_lobstr_table(int H, int L, unsigned seed, bool gru_only = false) {
+  std::mt19937 rng(seed);
+  sparsebody::io::TensorTable t("random");
+  add_gru(t, "gru.", 37, H, 1, rng);
+  if (!gru_only) {
+    add_linear(t, "latent.", H, L, rng);
+    add_linear(t, "pose.", L, 48, rng);
+    add_linear(t, "contact.", L, 4, rng);
+  }
+  return t;
+}
+
+// Loads Net's weights from an in-memory table, as the file loader would (all checks included).
+template <class Net>
+std::shared_ptr<const sparsebody::nn::NetworkWeights<Net>> weights_from_table(sparsebody::io::TensorTable t,
+                                                                              const char* kind) {
+  sparsebody::io::WeightsDocument doc{sparsebody::io::ModelInfo{t.source()}, std::move(t)};
+  doc.info.kind = kind;
+  doc.info.input_size = Net::in_size;
+  doc.info.output_size = Net::out_size;
+  return sparsebody::nn::NetworkWeights<Net>::from_document(std::move(doc), kind);
 }
 
 }  // namespace sparsebody_test

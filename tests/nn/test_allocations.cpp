@@ -1,7 +1,6 @@
 // Proves that stepping, resetting and reading every layer and network does not touch the heap.
 #include "support/alloc_counter.hpp"
 
-#include <random>
 
 #include <doctest/doctest.h>
 
@@ -55,15 +54,5 @@ TEST_CASE("zero allocations: LoBSTr with float16 weight storage") {
       kDir + "/lobstr_small.weights.json", "lobstr"));
 }
 TEST_CASE("zero allocations: paper-size LoBSTr 37->1024") {
-  std::mt19937 rng(1);
-  sparsebody::io::TensorTable t("random");
-  add_gru(t, "gru.", 37, 1024, 1, rng);
-  add_linear(t, "latent.", 1024, 128, rng);
-  add_linear(t, "pose.", 128, 48, rng);
-  add_linear(t, "contact.", 128, 4, rng);
-  sparsebody::io::WeightsDocument doc{sparsebody::io::ModelInfo{}, t};
-  doc.info.kind = "lobstr";
-  doc.info.input_size = 37;
-  doc.info.output_size = 52;
-  check_no_alloc(sparsebody::nn::NetworkWeights<LoBSTr1024<float>>::from_document(doc, "lobstr"), 100);
+  check_no_alloc(weights_from_table<LoBSTr1024<float>>(random_lobstr_table(1024, 128, 1), "lobstr"), 100);
 }

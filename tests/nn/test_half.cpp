@@ -39,26 +39,14 @@ TEST_CASE("LoBSTr with f16 weights equals the float network holding the same rou
   constexpr int H = 45, L = 24;
   using F32 = networks::LoBSTrNet<float, H, L>;
   using F16 = networks::LoBSTrNet<float, H, L, 37, nn::f16>;
-  std::mt19937 rng(4);
-  io::TensorTable t("test");
-  add_gru(t, "gru.", 37, H, 1, rng);
-  add_linear(t, "latent.", H, L, rng);
-  add_linear(t, "pose.", L, 48, rng);
-  add_linear(t, "contact.", L, 4, rng);
+  io::TensorTable t = random_lobstr_table(H, L, 4);
   io::TensorTable rounded = t;
   for (auto& kv : rounded.tensors())
     if (kv.first.rfind("gru.weight", 0) == 0 || kv.first == "latent.weight")
       for (double& v : kv.second.values) v = nn::to_float(nn::to_f16(static_cast<float>(v)));
-  auto make = [](io::TensorTable tt) {
-    io::WeightsDocument doc{io::ModelInfo{}, std::move(tt)};
-    doc.info.kind = "lobstr";
-    doc.info.input_size = 37;
-    doc.info.output_size = 52;
-    return doc;
-  };
-  auto w16 = nn::NetworkWeights<F16>::from_document(make(t), "lobstr");
-  auto w32 = nn::NetworkWeights<F32>::from_document(make(rounded), "lobstr");
-  auto w32_exact = nn::NetworkWeights<F32>::from_document(make(t), "lobstr");
+  auto w16 = weights_from_table<F16>(t, "lobstr");
+  auto w32 = weights_from_table<F32>(rounded, "lobstr");
+  auto w32_exact = weights_from_table<F32>(t, "lobstr");
   CHECK(w16->bytes() < w32->bytes() * 0.6);
   nn::Network<F16> a(w16);
   nn::Network<F32> b(w32), c(w32_exact);
@@ -81,19 +69,11 @@ TEST_CASE("LoBSTr with f16 weights equals the float network holding the same rou
 
 TEST_CASE("weights outside the float16 range are refused at load") {
   using Net = networks::LoBSTrNet<float, 8, 4, 37, nn::f16>;
-  std::mt19937 rng(5);
   io::TensorTable t("big.json");
-  add_gru(t, "gru.", 37, 8, 1, rng);
-  add_linear(t, "latent.", 8, 4, rng);
-  add_linear(t, "pose.", 4, 48, rng);
-  add_linear(t, "contact.", 4, 4, rng);
+  t.tensors() = random_lobstr_table(8, 4, 5).tensors();
   t.tensors()["gru.weight_hh_l0"].values[5] = 70000.0;
-  io::WeightsDocument doc{io::ModelInfo{"big.json"}, t};
-  doc.info.kind = "lobstr";
-  doc.info.input_size = 37;
-  doc.info.output_size = 52;
   try {
-    nn::NetworkWeights<Net>::from_document(doc, "lobstr");
+    weights_from_table<Net>(t, "lobstr");
     FAIL("expected LoadError");
   } catch (const LoadError& e) {
     CHECK(std::string(e.what()) ==

@@ -121,11 +121,7 @@ TEST_CASE_TEMPLATE("GRU stack equals the scalar PyTorch-equation oracle over 200
   std::mt19937 rng(3);
   io::TensorTable t("test");
   add_gru(t, "g.", In, H, L, rng);
-  io::WeightsDocument doc{io::ModelInfo{}, t};
-  doc.info.kind = "gru";
-  doc.info.input_size = In;
-  doc.info.output_size = H;
-  auto w = nn::NetworkWeights<Net>::from_document(doc, "gru");
+  auto w = weights_from_table<Net>(t, "gru");
   nn::Network<Net> net(w);
   std::vector<std::vector<double>> hs(L, std::vector<double>(H, 0.0));
   double max_err = 0;
@@ -146,17 +142,7 @@ TEST_CASE_TEMPLATE("GRU stack equals the scalar PyTorch-equation oracle over 200
 
 TEST_CASE("hidden state can be read, written and reset; instances sharing weights are independent") {
   using Net = sparsebody::networks::LoBSTrNet<float, 33, 16>;
-  std::mt19937 rng(5);
-  io::TensorTable t("test");
-  add_gru(t, "gru.", 37, 33, 1, rng);
-  add_linear(t, "latent.", 33, 16, rng);
-  add_linear(t, "pose.", 16, 48, rng);
-  add_linear(t, "contact.", 16, 4, rng);
-  io::WeightsDocument doc{io::ModelInfo{}, t};
-  doc.info.kind = "lobstr";
-  doc.info.input_size = 37;
-  doc.info.output_size = 52;
-  auto w = nn::NetworkWeights<Net>::from_document(doc, "lobstr");
+  auto w = weights_from_table<Net>(random_lobstr_table(33, 16, 5), "lobstr");
   nn::Network<Net> a(w), b(w);
   std::vector<float> x(37), y0(52), y1(52);
   for (int i = 0; i < 37; ++i) x[i] = 0.1f * i;
@@ -190,17 +176,7 @@ TEST_CASE("hidden state can be read, written and reset; instances sharing weight
 
 TEST_CASE("one set of weights serves many threads") {
   using Net = sparsebody::networks::LoBSTrNet<float, 64, 32>;
-  std::mt19937 rng(9);
-  io::TensorTable t("test");
-  add_gru(t, "gru.", 37, 64, 1, rng);
-  add_linear(t, "latent.", 64, 32, rng);
-  add_linear(t, "pose.", 32, 48, rng);
-  add_linear(t, "contact.", 32, 4, rng);
-  io::WeightsDocument doc{io::ModelInfo{}, t};
-  doc.info.kind = "lobstr";
-  doc.info.input_size = 37;
-  doc.info.output_size = 52;
-  auto w = nn::NetworkWeights<Net>::from_document(doc, "lobstr");
+  auto w = weights_from_table<Net>(random_lobstr_table(64, 32, 9), "lobstr");
   auto run = [&](int seed, std::vector<float>& out) {
     nn::Network<Net> n(w);
     std::vector<float> x(37);
@@ -224,11 +200,7 @@ TEST_CASE("step_guarded: NaN/Inf input is rejected without touching the state; a
   std::mt19937 rng(11);
   io::TensorTable t("test");
   add_gru(t, "g.", 3, 5, 1, rng);
-  io::WeightsDocument doc{io::ModelInfo{}, t};
-  doc.info.kind = "gru";
-  doc.info.input_size = 3;
-  doc.info.output_size = 5;
-  auto w = nn::NetworkWeights<Net>::from_document(doc, "gru");
+  auto w = weights_from_table<Net>(t, "gru");
   nn::Network<Net> a(w), b(w);
   const float good[3] = {0.1f, -0.2f, 0.3f};
   const float nan_in[3] = {0.1f, std::numeric_limits<float>::quiet_NaN(), 0.3f};
