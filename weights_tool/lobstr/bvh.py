@@ -90,9 +90,15 @@ def parse(text, source="<bvh>"):
     rows = [l for l in lines[i + 1:] if l.strip()]
     if len(rows) < nf:
         raise BVHError(f"{source}: expected {nf} frames, found {len(rows)}")
-    b.motion = np.array([[float(v) for v in r.split()] for r in rows[:nf]], dtype=np.float64).reshape(nf, -1)
-    if b.motion.shape[1] != nch:
-        raise BVHError(f"{source}: expected {nch} values per frame, found {b.motion.shape[1]}")
+    first = i + 2  # line number of the first frame
+    vals = []
+    for k, r in enumerate(rows[:nf]):
+        v = r.split()
+        if len(v) != nch:
+            raise BVHError(f"{source}: frame {k}: expected {nch} values per frame, found {len(v)}")
+        vals.append([float(x) for x in v])
+    del first
+    b.motion = np.array(vals, dtype=np.float64).reshape(nf, nch)
     return b
 
 

@@ -1,0 +1,83 @@
+// Per-frame latency of the LoBSTr avatar pipeline (features, network, heads, contacts, leg and arm
+// IK), streaming and window modes, compact (H=256, the shipped weights) and paper (H=1024, random
+// weights with the shipped file's metadata) configurations. Input: the CMU clip of the parity
+// golden, 30 Hz, one model step per pushed frame.
+// Targets on the 2-core dev machine: compact streaming <= 15 us, paper streaming <= 450 us.
+// Run: build/bench/bench_lobstr --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include <fstream>
+
+#include <benchmark/benchmark.h>
+
+#include "nn/random_tables.hpp"
+#include "sparsebody/avatar/lobstr_pipeline.hpp"
+
+using namespace sparsebody;
+
+namespace {
+
+std::vector<trackers::TrackerFrame> clip_frames() {
+  std::ifstream f(std::string(SPARSEBODY_PIPELINE_GOLDEN_DIR) + "/lobstr_pipeline_small.golden.json");
+  const auto g = nlohmann::json::parse(f);
+  std::vector<trackers::TrackerFrame> out;
+  for (std::size_t i = 0; i < g["positions"].size(); ++i) {
+    trackers::TrackerFrame fr;
+    for (int k = 0; k < 4; ++k) {
+      const auto& P = g["positions"][i][k];
+      const auto& Q = g["quaternions_xyzw"][i][k];
+      fr.pose[k].position = {P[0].get<float>(), P[1].get<float>(), P[2].get<float>()};
+      fr.pose[k].orientation = {Q[0].get<float>(), Q[1].get<float>(), Q[2].get<float>(), Q[3].get<float>()};
+      fr.valid[k] = true;
+    }
+    out.push_back(fr);
+  }
+  return out;
+}
+
+template <int H>
+std::shared_ptr<const typename avatar::LoBSTrPipeline<float, H, 128>::Weights> weights() {
+  using W = typename avatar::LoBSTrPipeline<float, H, 128>::Weights;
+  if constexpr (H == 256) {
+    return W::load(SPARSEBODY_LOBSTR_WEIGHTS);
+  } else {  // paper size: random tensors, the shipped file's metadata and input normalisation
+    io::WeightsDocument doc = io::read_weights_file(SPARSEBODY_LOBSTR_WEIGHTS);
+    doc.tensors = sparsebody_test::random_lobstr_table(H, 128, 11);
+    return W::from_document(std::move(doc), networks::kLoBSTrKind);
+  }
+}
+
+template <int H>
+void BM_Pipeline(benchmark::State& st) {
+  const bool window = st.range(0) != 0;
+  avatar::LoBSTrConfig cfg;
+  cfg.mode = window ? avatar::RunMode::Window : avatar::RunMode::Streaming;
+  avatar::LoBSTrPipeline<float, H, 128> p(weights<H>(), cfg);
+  const auto frames = clip_frames();
+  std::size_t i = 0;
+  double t = 0;
+  long steps = 0;
+  for (auto _ : st) {
+    if (i == frames.size()) {  // loop the clip: restart outside the timed region
+      st.PauseTiming();
+      p.reset();
+      i = 0;
+      st.ResumeTiming();
+    }
+    trackers::TrackerFrame f = frames[i++];
+    f.time = t;
+    t += 1.0 / 30.0;
+    steps += p.push(f);
+    benchmark::DoNotOptimize(p.pose().local.data());
+    benchmark::ClobberMemory();
+  }
+  st.counters["steps_per_frame"] = double(steps) / double(st.iterations());
+  st.SetLabel(std::string(H == 256 ? "compact H=256" : "paper H=1024") + (window ? ", window 30" : ", streaming"));
+}
+
+BENCHMARK_TEMPLATE(BM_Pipeline, 256)->Name("lobstr/compact/streaming")->Arg(0)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Pipeline, 256)->Name("lobstr/compact/window")->Arg(1)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Pipeline, 1024)->Name("lobstr/paper/streaming")->Arg(0)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Pipeline, 1024)->Name("lobstr/paper/window")->Arg(1)->Unit(benchmark::kMicrosecond)->Iterations(200);
+
+}  // namespace
+
+BENCHMARK_MAIN();
