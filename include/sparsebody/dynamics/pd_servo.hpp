@@ -1,0 +1,57 @@
+// PD servos (Neural3Points: kp = 200, kd = 20 on every joint at 120 Hz).
+// Targets use the configuration layout: a quaternion (w, x, y, z) per spherical joint, an angle per
+// revolute joint (free/fixed entries ignored). The spherical error is the rotation vector of
+// q^-1 q_target, i.e. expressed in the child frame like the joint velocity:
+//   tau = kp log(q^-1 q*) + kd (qd* - qd) - damping qd,
+// clamped to torque_limit (vector norm for spherical joints). This is the explicit part; the
+// damping of the next velocity, -h (kd + damping) qdd, is added implicitly inside ABA (D_i).
+#pragma once
+#include "kinematics.hpp"
+
+namespace sparsebody::dynamics {
+
+template <class S, int MB, int MD>
+inline void pdTorques(const Model<S, MB, MD>& m, const typename Model<S, MB, MD>::VecQ& q,
+                      const typename Model<S, MB, MD>::VecV& qd, const typename Model<S, MB, MD>::VecQ& q_target,
+                      const typename Model<S, MB, MD>::VecV& qd_target, typename Model<S, MB, MD>::VecV& tau) {
+  tau.setZero(m.nv);
+  for (int i = 0; i < m.nb; ++i) {
+    const Body<S>& b = m.bodies[i];
+    switch (b.joint) {
+      case JointType::Spherical: {
+        const Quat<S> cur = readQuat<S>(q, b.q_index), tgt = readQuat<S>(q_target, b.q_index);
+        const Vec3<S> e = quatLog(Quat<S>(cur.conjugate() * tgt));
+        const Vec3<S> w = qd.template segment<3>(b.v_index);
+        Vec3<S> t = b.kp * e + b.kd * (Vec3<S>(qd_target.template segment<3>(b.v_index)) - w);
+        const S n = t.norm();
+        if (b.torque_limit > S(0) && n > b.torque_limit) t *= b.torque_limit / n;
+        tau.template segment<3>(b.v_index) = t - b.damping * w;
+        break;
+      }
+      case JointType::Revolute: {
+        const int k = b.v_index;
+        S t = b.kp * (q_target(b.q_index) - q(b.q_index)) + b.kd * (qd_target(k) - qd(k));
+        if (b.torque_limit > S(0)) t = std::max(-b.torque_limit, std::min(b.torque_limit, t));
+        tau(k) = t - b.damping * qd(k);
+        break;
+      }
+      case JointType::Free:
+        tau.template segment<6>(b.v_index) = -b.damping * qd.template segment<6>(b.v_index);
+        break;
+      case JointType::Fixed: break;
+    }
+  }
+}
+
+// Passive damping only (torque-driven use): tau = -damping qd.
+template <class S, int MB, int MD>
+inline void passiveTorques(const Model<S, MB, MD>& m, const typename Model<S, MB, MD>::VecV& qd,
+                           typename Model<S, MB, MD>::VecV& tau) {
+  tau.setZero(m.nv);
+  for (int i = 0; i < m.nb; ++i) {
+    const Body<S>& b = m.bodies[i];
+    for (int k = 0; k < jointNv(b.joint); ++k) tau(b.v_index + k) = -b.damping * qd(b.v_index + k);
+  }
+}
+
+}  // namespace sparsebody::dynamics
