@@ -36,3 +36,31 @@ inline sparsebody::features::n3p::TrackerSet golden_trackers(const nlohmann::jso
 }
 
 }  // namespace n3p_test
+
+#include "sparsebody/avatar/n3p_direct.hpp"
+#include "sparsebody/trackers/types.hpp"
+
+namespace n3p_test {
+
+using SmallPipeline = sparsebody::avatar::N3PPipeline<float, 16, 24, 24>;
+
+// Golden frame t as an OpenXR-style tracker frame at 30 Hz (pelvis absent); validity from "present".
+inline sparsebody::trackers::TrackerFrame golden_frame(const nlohmann::json& g, int t) {
+  using namespace sparsebody;
+  const auto o = golden_trackers(g, t);
+  trackers::TrackerFrame f;
+  f.time = t / 30.0;
+  for (int k = 0; k < 3; ++k) {
+    Eigen::Matrix3d R;
+    R.col(2) = o[k].fwd.normalized();
+    R.col(0) = o[k].up.cross(R.col(2)).normalized();
+    R.col(1) = R.col(2).cross(R.col(0));
+    f.pose[k].position = trackers::to_xr(o[k].p);
+    f.pose[k].orientation = trackers::to_xr(Eigen::Quaterniond(R));
+    f.valid[k] = g["present"][t][k].get<int>() != 0;
+  }
+  f.valid[3] = false;
+  return f;
+}
+
+}  // namespace n3p_test

@@ -53,7 +53,7 @@ def metrics(nets, data, init, hmd_only=False, limit=None):
         m = c["CT"][1:] > 0.5
         if m.any():
             skate.append(v[m])
-    cat = lambda x: float(np.concatenate(x).mean())
+    cat = lambda x: float(np.concatenate(x).mean()) if x else float("nan")  # nan: no such frames
     return {"clips": n, "mpjpe_cm": 100 * cat(err), "mpjpe_upper_cm": 100 * cat(err_up),
             "mpjpe_lower_cm": 100 * cat(err_lo), "mpjre_deg": cat(rot), "jitter_km_s3": cat(jit) / 1000,
             "foot_skating_cm_s": 100 * cat(skate)}

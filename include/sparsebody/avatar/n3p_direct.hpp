@@ -1,0 +1,233 @@
+// The Neural3Points avatar pipeline in direct mode (Ye et al., SCA 2022, §3, §4, §7): headset + two
+// controllers in, a full-body pose on the standard skeleton out, no pelvis tracker needed.
+//
+//   TrackerFrame (any rate) -> Resampler (30 Hz) -> TrackerSanitizer (bad input)
+//     -> N3PCalibration (device -> head / wrist joints, height scale, §7)
+//     -> N3PPredictor (Eq. (2): G_sig -> G_lo -> heading update -> G_up; o* for missing controllers)
+//     -> direct-mode IK (§7, "to enforce foot contacts and achieve accurate tracker positions"):
+//        feet in contact (c > threshold) are pinned with pose::FootLock and two-bone leg IK;
+//        hands are put on the measured controllers with two-bone arm IK.
+//
+// Tracker modes, per frame from the validity flags (§8.2): 3-point; one controller (the missing one
+// from o*); HMD only (both from o*). A controller that was never seen is predicted too. The pelvis
+// tracker, if any, is ignored (use the LoBSTr pipeline for it).
+// Bad input:
+//   headset (trackers/sanitizer.hpp, as the LoBSTr pipeline): NaN / Inf / non-unit quaternion or a
+//     jump makes it invalid for the frame and its last pose is held; a long loss, a tracking-origin
+//     jump or a resampler gap (time jump) restarts the predictor from its default state; before the
+//     first valid headset frame there is no output;
+//   controllers: invalid flag, NaN / Inf, a quaternion off unit length by more than the sanitizer's
+//     tolerance, or a position further than `controller_max_distance` from the headset: the
+//     controller is missing for that frame and o* stands in (§8.2). No hold and no reset, so a
+//     controller coming back after a long absence is simply used again.
+// The output pose is always finite: a frame that would not be keeps the last pose.
+// Per frame: no allocation, no exception, no lock. Everything is sized at construction.
+//
+// Use (the LoBSTr pipeline's shape):
+//   auto w = avatar::N3PPipeline<>::load("examples/weights/n3p");   // n3p_{signal,lower,upper}.json
+//   avatar::N3PPipeline<> p(w);
+//   p.calibrate(tpose_frame);                  // optional, §7
+//   for (frame : frames) { p.push(frame); if (p.has_output()) use(p.pose(), p.world(), p.user_scale()); }
+#pragma once
+#include <array>
+#include <string>
+
+#include "sparsebody/avatar/n3p_predictor.hpp"
+#include "sparsebody/features/n3p_calibration.hpp"
+#include "sparsebody/pose/body_pose.hpp"
+#include "sparsebody/pose/contact.hpp"
+#include "sparsebody/pose/ik.hpp"
+#include "sparsebody/trackers/resampler.hpp"
+#include "sparsebody/trackers/sanitizer.hpp"
+
+namespace sparsebody::avatar {
+
+struct N3PConfig {
+  double contact_threshold = 0.5;  // c above which a foot is in contact
+  bool foot_ik = true;             // pin feet in contact (direct mode)
+  bool hand_ik = true;             // hands on the measured controllers (direct mode)
+  bool use_controllers = true;     // false: HMD-only mode even when controllers are tracked
+  double controller_max_distance = 1.5;  // from the headset (m, user's size); further: missing
+  double foot_max_drift = 0.3;     // a pinned foot further than this from the prediction is released (m)
+  trackers::SanitizerConfig sanitizer{};
+};
+
+template <typename T = float, int HSig = 64, int HLo = 128, int HUp = 128>
+class N3PPipeline {
+ public:
+  using Predictor = N3PPredictor<T, HSig, HLo, HUp>;
+  using Weights = typename Predictor::Weights;
+
+  // prefix ("…/n3p") or any of the three files; throws LoadError.
+  static Weights load(const std::string& path) { return Predictor::load(path); }
+
+  explicit N3PPipeline(const Weights& w, N3PConfig cfg = {})
+      : cfg_(cfg), pred_(w), sanitizer_(cfg.sanitizer), resampler_(pred_.meta().frame_rate) {
+    const pose::Skeleton& s = pred_.skeleton();
+    pose_.resize(s.size());
+    last_pose_.resize(s.size());
+    world_.resize(s.size());
+    last_world_.resize(s.size());
+    auto f = [&](const char* n) { return s.find(n); };
+    const char* arm[2][3] = {{"UpperArm_L", "LowerArm_L", "Hand_L"}, {"UpperArm_R", "LowerArm_R", "Hand_R"}};
+    const char* leg[2][3] = {{"UpperLeg_L", "LowerLeg_L", "Foot_L"}, {"UpperLeg_R", "LowerLeg_R", "Foot_R"}};
+    for (int side = 0; side < 2; ++side)
+      for (int i = 0; i < 3; ++i) {
+        arm_[side][i] = f(arm[side][i]);
+        leg_[side][i] = f(leg[side][i]);
+        if (arm_[side][i] < 0 || leg_[side][i] < 0) throw LoadError("n3p pipeline", "skeleton lacks an arm or leg joint");
+      }
+    for (int side = 0; side < 2; ++side)
+      reach_[side] = s.offsets[leg_[side][1]].norm() + s.offsets[leg_[side][2]].norm();
+    reset();
+  }
+
+  // --- calibration (§7) ---------------------------------------------------------------------
+  void set_calibration(const features::n3p::N3PCalibration& c) noexcept { calib_ = c; }
+  const features::n3p::N3PCalibration& calibration() const noexcept { return calib_; }
+  // From a T-pose frame (headset and both controllers valid); false when it cannot be used.
+  bool calibrate(const trackers::TrackerFrame& tpose) noexcept {
+    return calib_.from_tpose(tpose, pred_.skeleton(), pred_.meta().standing_hips_height, pred_.meta().standing_head_height);
+  }
+
+  // --- running ------------------------------------------------------------------------------
+  // One input frame at any rate; runs one model step per 30 Hz tick it completes. Returns the
+  // number of steps run.
+  int push(const trackers::TrackerFrame& f) noexcept {
+    return resampler_.push(f, [this](const trackers::TrackerFrame& tick, bool gap) { step(tick, gap); });
+  }
+
+  // One model frame (the caller did the resampling). `restart`: state reset before this frame.
+  void step(const trackers::TrackerFrame& f, bool restart = false) noexcept {
+    trackers::TrackerFrame head_only = f;  // the sanitizer looks after the headset only
+    head_only.valid[1] = head_only.valid[2] = head_only.valid[3] = false;
+    const trackers::SanitizedFrame& s = sanitizer_.process(head_only, 1.0 / pred_.meta().frame_rate);
+    if (restart || s.reset) reset_state();
+    ++frames_;
+    if (!s.usable) return;  // no headset yet: no output (or the last one is kept)
+    features::n3p::TrackerSet o;
+    std::array<bool, 3> present{true, false, false};  // the headset: measured or held
+    o[0] = calib_.apply(0, s.pose[0]);
+    for (int k = 1; k < 3; ++k) {
+      trackers::PoseD c;
+      present[k] = cfg_.use_controllers && controller(f, k, s.pose[0].position, c);
+      if (present[k]) o[k] = calib_.apply(k, c);
+    }
+    if (!pred_.step(o, present)) return;
+    pose_ = pred_.pose();  // same size: no allocation
+    pose::forward_kinematics(pred_.skeleton(), pose_, world_);
+    if (cfg_.foot_ik) pin_feet();
+    if (cfg_.hand_ik)
+      for (int side = 0; side < 2; ++side)
+        if (present[1 + side]) limb_to(arm_[side], o[1 + side].p);
+    if (cfg_.foot_ik || cfg_.hand_ik) pose::forward_kinematics(pred_.skeleton(), pose_, world_);
+    if (!finite_pose()) {  // never hand out a NaN: keep the last pose and restart
+      reset_state();
+      pose_ = last_pose_;
+      world_ = last_world_;
+      return;
+    }
+    last_pose_ = pose_;
+    last_world_ = world_;
+    valid_output_ = true;
+  }
+
+  void reset() noexcept {
+    reset_state();
+    sanitizer_.reset();
+    resampler_.reset();
+    frames_ = 0;
+    valid_output_ = false;
+  }
+
+  // --- results ------------------------------------------------------------------------------
+  // The pose on the standard skeleton in its scale (metres); multiply positions and offsets by
+  // user_scale() for the user's size. Valid when has_output().
+  const pose::BodyPose& pose() const noexcept { return pose_; }
+  const pose::WorldPose& world() const noexcept { return world_; }
+  bool has_output() const noexcept { return valid_output_; }
+  double user_scale() const noexcept { return 1.0 / calib_.base.scale; }
+  const pose::Skeleton& skeleton() const noexcept { return pred_.skeleton(); }
+  const Predictor& predictor() const noexcept { return pred_; }
+  double contact_probability(int foot) const noexcept { return pred_.contact(foot); }
+  bool contact(int foot) const noexcept { return contact_probability(foot) > cfg_.contact_threshold; }
+  bool foot_locked(int foot) const noexcept { return lock_[foot].state() != pose::FootLock::State::Free; }
+  // Controllers replaced by o* in the last frame (0: 3-point, 1: one controller, 2: HMD only).
+  int predicted_controllers() const noexcept { return pred_.substituted(1) + pred_.substituted(2); }
+  long long frames() const noexcept { return frames_; }
+  const N3PConfig& config() const noexcept { return cfg_; }
+
+ private:
+  void reset_state() noexcept {
+    pred_.reset();
+    lock_[0].reset();
+    lock_[1].reset();
+  }
+
+  // Controller k of the raw frame when it is usable (see the bad-input rules above).
+  bool controller(const trackers::TrackerFrame& f, int k, const Eigen::Vector3d& head, trackers::PoseD& out) const noexcept {
+    if (!f.valid[k]) return false;
+    const Eigen::Vector3d p = trackers::to_eigen(f.pose[k].position);
+    const Eigen::Quaterniond q = trackers::to_eigen(f.pose[k].orientation);
+    if (!p.allFinite() || !q.coeffs().allFinite()) return false;
+    const double n = q.norm();
+    if (!(std::abs(n - 1.0) <= cfg_.sanitizer.quat_tolerance)) return false;
+    if (!((p - head).norm() <= cfg_.controller_max_distance)) return false;
+    out.position = p;
+    out.orientation = Eigen::Quaterniond(q.coeffs() / n);
+    return true;
+  }
+
+  bool finite_pose() const noexcept {
+    bool ok = pose_.root_position.allFinite();
+    for (std::size_t j = 0; j < pose_.local.size(); ++j)
+      ok &= pose_.local[j].coeffs().allFinite() && world_.position[j].allFinite();
+    return ok;
+  }
+
+  // Feet in contact stay where contact began (pose::FootLock), the leg bent to reach them.
+  void pin_feet() noexcept {
+    for (int side = 0; side < 2; ++side) {
+      const int* l = leg_[side];
+      Eigen::Vector3d target;
+      if (lock_[side].update(contact(side), world_.position[l[2]], world_.position[l[0]], reach_[side], cfg_.foot_max_drift,
+                             target)) {
+        limb_to(l, target);
+        pose::forward_kinematics(pred_.skeleton(), pose_, world_);
+      }
+    }
+  }
+
+  // Two-bone IK on the chain a -> b -> c (c's world rotation kept): c goes to `target`.
+  void limb_to(const int* j, const Eigen::Vector3d& target) noexcept {
+    const int a = j[0], b = j[1], c = j[2];
+    const Eigen::Vector3d pa = world_.position[a], pb = world_.position[b], pc = world_.position[c];
+    Eigen::Vector3d nb, nc;
+    pose::two_bone(pa, pb, pc, target, pb - pa, nb, nc);
+    const Eigen::Quaterniond s1 = pose::swing(pb - pa, nb - pa);
+    const Eigen::Quaterniond qa = (s1 * world_.rotation[a]).normalized();
+    const Eigen::Quaterniond qb = (pose::swing(s1 * (pc - pb), nc - nb) * s1 * world_.rotation[b]).normalized();
+    const Eigen::Quaterniond qc = world_.rotation[c];
+    const int pa_parent = pred_.skeleton().parents[a];
+    pose_.local[a] = pa_parent < 0 ? qa : Eigen::Quaterniond(world_.rotation[pa_parent].conjugate() * qa);
+    pose_.local[b] = qa.conjugate() * qb;
+    pose_.local[c] = qb.conjugate() * qc;
+    world_.rotation[a] = qa;
+    world_.rotation[b] = qb;
+  }
+
+  N3PConfig cfg_;
+  Predictor pred_;
+  trackers::TrackerSanitizer sanitizer_;
+  trackers::Resampler resampler_;
+  features::n3p::N3PCalibration calib_;
+  pose::BodyPose pose_, last_pose_;
+  pose::WorldPose world_, last_world_;
+  pose::FootLock lock_[2];
+  int arm_[2][3] = {}, leg_[2][3] = {};
+  double reach_[2] = {};
+  long long frames_ = 0;
+  bool valid_output_ = false;
+};
+
+}  // namespace sparsebody::avatar

@@ -1,0 +1,87 @@
+// Neural3Points calibration (SCA 2022, §7): the predictor's input is the pose of the user's neck/head
+// and wrists, not of the devices. From one T-pose frame the offsets between the devices and those
+// joints are measured:
+//   - orientation offsets o_k and the height scale s: the shared T-pose calibration
+//     (features/calibration.hpp: calibrated orientation q_k o_k = the body's facing frame at
+//     calibration; s = standard head height / headset height);
+//   - positional offsets d_k, in the device's own frame: in the T-pose the wrists sit where the
+//     standard skeleton's T-pose puts them relative to the head joint (arms straight out sideways,
+//     in the user's size), so d_k = q_k^-1 (p_wrist_k - p_k). The head offset stays zero: the
+//     headset is taken as the head joint, as in training (scale from its height).
+// Calibrated joint pose of tracker k: position s (p_k + q_k d_k), orientation q_k o_k.
+#pragma once
+#include <array>
+#include <cmath>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "sparsebody/features/calibration.hpp"
+#include "sparsebody/features/n3p_tracker_input.hpp"
+#include "sparsebody/pose/skeleton.hpp"
+#include "sparsebody/trackers/synthesis.hpp"
+#include "sparsebody/trackers/types.hpp"
+
+namespace sparsebody::features::n3p {
+
+// Wrist positions of the skeleton's T-pose relative to its head joint, in the body's facing frame
+// (X left, Y up, Z forward), skeleton units. Needs joints named Chest, Neck, Head, Shoulder_L,
+// UpperArm_L, LowerArm_L, Hand_L and the _R twins (the standard skeleton); zero when absent.
+inline std::array<Eigen::Vector3d, 2> tpose_wrists(const pose::Skeleton& s) {
+  std::array<Eigen::Vector3d, 2> out{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  const int chest = s.find("Chest"), neck = s.find("Neck"), head = s.find("Head");
+  if (chest < 0 || neck < 0 || head < 0) return out;
+  const Eigen::Vector3d spine_dir = s.offsets[neck].normalized();  // the spine's axis in the chest frame
+  const double head_up = s.offsets[neck].norm() + s.offsets[head].norm();
+  const char* names[2][4] = {{"Shoulder_L", "UpperArm_L", "LowerArm_L", "Hand_L"},
+                             {"Shoulder_R", "UpperArm_R", "LowerArm_R", "Hand_R"}};
+  for (int side = 0; side < 2; ++side) {
+    int j[4];
+    for (int i = 0; i < 4; ++i) j[i] = s.find(names[side][i]);
+    if (j[0] < 0 || j[1] < 0 || j[2] < 0 || j[3] < 0) continue;
+    const Eigen::Vector3d sh = s.offsets[j[0]];
+    const double up = sh.dot(spine_dir);
+    const double lateral = (sh - up * spine_dir).norm() + s.offsets[j[1]].norm() + s.offsets[j[2]].norm() + s.offsets[j[3]].norm();
+    out[side] = Eigen::Vector3d(side == 0 ? lateral : -lateral, up - head_up, 0.0);
+  }
+  return out;
+}
+
+struct N3PCalibration {
+  Calibration base;                                   // o_k, s (shared T-pose calibration)
+  std::array<Eigen::Vector3d, kTrackers> offset{       // d_k, device frame, metres (user's size)
+      Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+
+  // From a T-pose frame (head and both controllers valid). False (unchanged) when unusable.
+  bool from_tpose(const trackers::TrackerFrame& f, const pose::Skeleton& skeleton, double standard_hips_height,
+                  double standard_head_height) noexcept {
+    if (!f.valid[0] || !f.valid[1] || !f.valid[2]) return false;
+    N3PCalibration c;
+    // the pelvis tracker plays no part here: calibrate orientations and scale from the headset
+    trackers::TrackerFrame g = f;
+    g.valid[3] = false;
+    if (!c.base.from_tpose(g, standard_hips_height, standard_head_height)) return false;
+    const Eigen::Quaterniond qh = trackers::to_eigen(f.pose[0].orientation).normalized();
+    const Eigen::Matrix3d yaw = trackers::yaw_frame(-(qh * Eigen::Vector3d::UnitZ()), Eigen::Matrix3d::Identity());
+    const Eigen::Vector3d head = trackers::to_eigen(f.pose[0].position);
+    const std::array<Eigen::Vector3d, 2> w = tpose_wrists(skeleton);
+    for (int k = 1; k < 3; ++k) {
+      const Eigen::Quaterniond q = trackers::to_eigen(f.pose[k].orientation).normalized();
+      const Eigen::Vector3d p = trackers::to_eigen(f.pose[k].position);
+      if (!p.allFinite() || !q.coeffs().allFinite()) return false;
+      const Eigen::Vector3d wrist = head + yaw * (w[k - 1] / c.base.scale);
+      c.offset[k] = q.conjugate() * (wrist - p);
+      if (!(c.offset[k].norm() < 0.5)) return false;  // not a T-pose (devices far from the wrists)
+    }
+    *this = c;
+    return true;
+  }
+
+  // Calibrated joint sample of tracker k (k < 3) from a device pose.
+  TrackerSample apply(int k, const trackers::PoseD& device) const noexcept {
+    const Eigen::Vector3d p = base.scale * (device.position + device.orientation * offset[k]);
+    return TrackerSample::from(p, (device.orientation * base.offset[k]).toRotationMatrix());
+  }
+};
+
+}  // namespace sparsebody::features::n3p

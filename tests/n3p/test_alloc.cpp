@@ -1,0 +1,33 @@
+// Zero heap allocations per frame: the pipeline (resampler, sanitizer, calibration, predictor,
+// direct-mode IK) over clean frames, HMD-only frames and bad input.
+#include <doctest/doctest.h>
+
+#include "n3p/common.hpp"
+#include "support/alloc_counter.hpp"
+
+using namespace sparsebody;
+
+TEST_CASE("n3p pipeline: no allocation per frame") {
+  const auto g = n3p_test::read_json(n3p_test::golden_dir() + "/n3p_small.golden.json");
+  const auto w = n3p_test::SmallPipeline::load(n3p_test::small_prefix());
+  avatar::N3PConfig c;
+  c.contact_threshold = 0.0;
+  n3p_test::SmallPipeline p(w, c);
+  std::vector<trackers::TrackerFrame> frames;
+  for (int t = 0; t < g["frames"].get<int>(); ++t) frames.push_back(n3p_test::golden_frame(g, t));
+  frames[20].pose[0].position.x = std::numeric_limits<float>::quiet_NaN();
+  frames[21].valid[0] = false;
+  for (int t = 0; t < 3; ++t) p.push(frames[t]);  // warm-up
+  long long n = 0;
+  {
+    sparsebody_test::AllocationCounter counter;
+    for (std::size_t t = 3; t < frames.size(); ++t) {
+      trackers::TrackerFrame f = frames[t];
+      f.time += 0.004;  // off the 30 Hz grid: the resampler interpolates
+      p.push(f);
+    }
+    n = counter.count();
+  }
+  CHECK(n == 0);
+  CHECK(p.has_output());
+}

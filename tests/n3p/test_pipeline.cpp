@@ -1,0 +1,226 @@
+// N3PPipeline (direct mode): equals the predictor on clean input, tracker modes per frame (3-point,
+// one controller, HMD only), direct-mode IK (hands on controllers, feet pinned), calibration (§7),
+// and bad input (NaN, lost trackers, gaps, jumps): defined behaviour, never a NaN out.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "n3p/common.hpp"
+
+using namespace sparsebody;
+
+namespace {
+const nlohmann::json& golden() {
+  static const nlohmann::json g = n3p_test::read_json(n3p_test::golden_dir() + "/n3p_small.golden.json");
+  return g;
+}
+const n3p_test::SmallPipeline::Weights& weights() {
+  static const auto w = n3p_test::SmallPipeline::load(n3p_test::small_prefix());
+  return w;
+}
+bool finite(const n3p_test::SmallPipeline& p) {
+  bool ok = p.pose().root_position.allFinite();
+  for (int j = 0; j < p.skeleton().size(); ++j) ok &= p.world().position[j].allFinite() && p.pose().local[j].coeffs().allFinite();
+  return ok;
+}
+avatar::N3PConfig no_ik() {
+  avatar::N3PConfig c;
+  c.foot_ik = c.hand_ik = false;
+  return c;
+}
+}  // namespace
+
+TEST_CASE("n3p pipeline: without IK it reproduces the PyTorch reference, controller flags -> modes") {
+  const auto& g = golden();
+  n3p_test::SmallPipeline p(weights(), no_ik());
+  int modes[3] = {0, 0, 0};
+  double worst = 0;
+  for (int t = 0; t < g["frames"].get<int>(); ++t) {
+    const auto f = n3p_test::golden_frame(g, t);
+    REQUIRE(p.push(f) == 1);
+    REQUIRE(p.has_output());
+    const int m = p.predicted_controllers();
+    CHECK(m == (!f.valid[1]) + (!f.valid[2]));
+    ++modes[m];
+    for (int j = 0; j < p.skeleton().size(); ++j)
+      for (int i = 0; i < 3; ++i)
+        worst = std::max(worst, std::abs(p.world().position[j][i] - g["positions"][t][3 * j + i].get<double>()));
+  }
+  CHECK(worst < 1e-4);
+  CHECK(modes[0] > 0);
+  CHECK(modes[1] >= 30);
+  CHECK(modes[2] >= 30);
+}
+
+TEST_CASE("n3p pipeline: HMD-only by configuration ignores tracked controllers") {
+  const auto& g = golden();
+  avatar::N3PConfig c = no_ik();
+  c.use_controllers = false;
+  n3p_test::SmallPipeline hmd(weights(), c), three(weights(), no_ik());
+  double diff = 0;
+  for (int t = 0; t < 50; ++t) {
+    auto f = n3p_test::golden_frame(g, t);
+    hmd.push(f);
+    three.push(f);
+    CHECK(hmd.predicted_controllers() == 2);
+    CHECK(three.predicted_controllers() == 0);
+    diff = std::max(diff, (hmd.world().position[8] - three.world().position[8]).norm());
+  }
+  CHECK(diff > 1e-4);  // the hands really come from o*
+  CHECK(finite(hmd));
+}
+
+TEST_CASE("n3p direct mode: hands on the controllers, feet pinned while in contact") {
+  const auto& g = golden();
+  avatar::N3PConfig c;
+  c.contact_threshold = -1.0;  // every frame in contact: both feet lock
+  c.foot_max_drift = 100.0;   // random weights: feet jump about; keep the locks for the test
+  n3p_test::SmallPipeline p(weights(), c), free(weights(), no_ik());
+  const int hand[2] = {p.skeleton().find("Hand_L"), p.skeleton().find("Hand_R")};
+  const int foot[2] = {p.skeleton().find("Foot_L"), p.skeleton().find("Foot_R")};
+  const int upleg[2] = {p.skeleton().find("UpperLeg_L"), p.skeleton().find("UpperLeg_R")};
+  int on_controller = 0, checked = 0, pinned = 0;
+  Eigen::Vector3d prev[2];
+  for (int t = 0; t < 60; ++t) {
+    const auto f = n3p_test::golden_frame(g, t);
+    p.push(f);
+    free.push(f);
+    REQUIRE(finite(p));
+    for (int s = 0; s < 2; ++s) {
+      const Eigen::Vector3d target = trackers::to_eigen(f.pose[1 + s].position);
+      // IK never moves a hand away from its controller
+      if (f.valid[1 + s])
+        CHECK((p.world().position[hand[s]] - target).norm() <= (free.world().position[hand[s]] - target).norm() + 1e-9);
+      const double reach = p.skeleton().offsets[hand[s]].norm() + p.skeleton().offsets[hand[s] - 1].norm();
+      const int shoulder = hand[s] - 2;
+      if (f.valid[1 + s] && (target - p.world().position[shoulder]).norm() < reach - 1e-3) {
+        ++checked;
+        on_controller += (p.world().position[hand[s]] - target).norm() < 1e-6;
+      }
+      if (t > 0 && p.foot_locked(s) && (prev[s] - p.world().position[upleg[s]]).norm() < 0.8) {
+        pinned += (p.world().position[foot[s]] - prev[s]).norm() < 1e-6;
+      }
+      prev[s] = p.world().position[foot[s]];
+    }
+  }
+  CHECK(on_controller == checked);  // (random weights: the controllers are seldom within reach)
+  CHECK(pinned > 5);  // (random weights: the hips wander, locks out of reach are released)
+}
+
+TEST_CASE("n3p calibration (§7): T-pose offsets put the devices' joints at the wrists and head") {
+  const auto& s = n3p_test::SmallPredictor(weights()).skeleton();
+  const auto w = features::n3p::tpose_wrists(s);
+  CHECK(w[0].x() > 0.4);   // left wrist to the left (+X of the facing frame)
+  CHECK(w[1].x() < -0.4);
+  CHECK(std::abs(w[0].y() - w[1].y()) < 1e-3);
+  // a user 10 % taller than the standard skeleton, facing -Z (OpenXR), controllers 8 cm off the wrists
+  const double user = 1.1, head_h = 1.378 * user;
+  trackers::TrackerFrame f;
+  const Eigen::Matrix3d yaw = trackers::yaw_frame(Eigen::Vector3d(0, 0, -1), Eigen::Matrix3d::Identity());
+  const Eigen::Vector3d head(0.3, head_h, 2.0);
+  const Eigen::Quaterniond qh = Eigen::Quaterniond::Identity();  // OpenXR: the headset looks along its -Z
+  f.pose[0] = {trackers::to_xr(qh), trackers::to_xr(head)};
+  Eigen::Vector3d wrist_world[2];
+  for (int k = 1; k < 3; ++k) {
+    wrist_world[k - 1] = head + yaw * (w[k - 1] * user);
+    const Eigen::Quaterniond q(Eigen::AngleAxisd(0.4 * k, Eigen::Vector3d(1, 1, 0).normalized()));
+    const Eigen::Vector3d device = wrist_world[k - 1] + q * Eigen::Vector3d(0, -0.02, 0.08);
+    f.pose[k] = {trackers::to_xr(q), trackers::to_xr(device)};
+  }
+  f.valid = {true, true, true, false};
+  features::n3p::N3PCalibration c;
+  REQUIRE(c.from_tpose(f, s, 0.908, 1.378));
+  CHECK(c.base.scale == doctest::Approx(1 / user).epsilon(1e-6));
+  for (int k = 1; k < 3; ++k) {
+    trackers::PoseD d{trackers::to_eigen(f.pose[k].position), trackers::to_eigen(f.pose[k].orientation)};
+    d.orientation.normalize();
+    CHECK((c.offset[k] + Eigen::Vector3d(0, -0.02, 0.08)).norm() < 1e-5);  // device -> wrist
+    const auto j = c.apply(k, d);
+    CHECK((j.p - wrist_world[k - 1] / user).norm() < 1e-5);
+    // calibrated orientation = the facing frame at calibration
+    CHECK((j.fwd - yaw.col(2)).norm() < 1e-5);
+  }
+  // not a T-pose: controllers at the head
+  f.pose[1].position = f.pose[0].position;
+  CHECK_FALSE(c.from_tpose(f, s, 0.908, 1.378));
+}
+
+TEST_CASE("n3p pipeline: bad input never produces a NaN and is handled as defined") {
+  const auto& g = golden();
+  n3p_test::SmallPipeline p(weights());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // no headset yet: no output
+  auto f0 = n3p_test::golden_frame(g, 0);
+  f0.valid[0] = false;
+  p.push(f0);
+  CHECK_FALSE(p.has_output());
+  int t = 1;
+  auto feed = [&](auto&& edit) {
+    auto f = n3p_test::golden_frame(g, t % 200);
+    f.time = t / 30.0;
+    f.valid = {true, true, true, false};
+    edit(f);
+    p.push(f);
+    ++t;
+    REQUIRE(finite(p));
+  };
+  for (int i = 0; i < 20; ++i) feed([](trackers::TrackerFrame&) {});
+  CHECK(p.has_output());
+  // NaN positions and orientations on every tracker, with valid flags set
+  for (int i = 0; i < 5; ++i)
+    feed([&](trackers::TrackerFrame& f) {
+      f.pose[0].position.x = static_cast<float>(nan);
+      f.pose[1].orientation.w = static_cast<float>(nan);
+      f.pose[2].position.y = std::numeric_limits<float>::infinity();
+    });
+  CHECK(p.predicted_controllers() == 2);  // the controllers were rejected: o* stands in
+  // non-unit quaternion, zero quaternion
+  feed([](trackers::TrackerFrame& f) { f.pose[1].orientation = {0, 0, 0, 0}; f.pose[2].orientation = {3, 0, 0, 0}; });
+  CHECK(p.predicted_controllers() == 2);
+  // one controller lost for a while
+  for (int i = 0; i < 30; ++i) feed([](trackers::TrackerFrame& f) { f.valid[2] = false; });
+  CHECK(p.predicted_controllers() == 1);
+  // a controller 5 m away from the headset (glitch): missing for that frame
+  feed([](trackers::TrackerFrame& f) { f.pose[1].position.x += 5; });
+  CHECK(p.predicted_controllers() == 1);
+  feed([](trackers::TrackerFrame&) {});
+  CHECK(p.predicted_controllers() == 0);  // used again at once
+  // a headset jump of 3 m for one frame: held
+  feed([](trackers::TrackerFrame& f) { f.pose[0].position.x += 3; });
+  // headset lost for 2 s: held, then a reset; output stays finite
+  for (int i = 0; i < 60; ++i) feed([](trackers::TrackerFrame& f) { f.valid[0] = false; });
+  // a time gap of 3 s (resampler restart) and a time going backwards
+  t += 90;
+  feed([](trackers::TrackerFrame&) {});
+  feed([](trackers::TrackerFrame& f) { f.time -= 1.0; });
+  // tracking origin moved by 10 m for good: accepted after a few frames
+  for (int i = 0; i < 10; ++i)
+    feed([](trackers::TrackerFrame& f) {
+      for (int k = 0; k < 3; ++k) f.pose[k].position.z += 10;
+    });
+  CHECK(p.has_output());
+  // all trackers invalid for long
+  for (int i = 0; i < 40; ++i) feed([](trackers::TrackerFrame& f) { f.valid = {false, false, false, false}; });
+  // NaN time: dropped
+  auto f = n3p_test::golden_frame(g, 3);
+  f.time = nan;
+  CHECK(p.push(f) == 0);
+  // back to normal
+  for (int i = 0; i < 30; ++i) feed([](trackers::TrackerFrame&) {});
+  CHECK(p.has_output());
+  CHECK(p.predicted_controllers() == 0);
+}
+
+TEST_CASE("n3p predictor: absurd tracker values cannot make the state non-finite") {
+  n3p_test::SmallPredictor p(weights());
+  features::n3p::TrackerSet o;
+  for (int k = 0; k < 3; ++k) o[k].p = Eigen::Vector3d(1e30, -1e30, 1e30);
+  for (int i = 0; i < 10; ++i) {
+    p.step(o, {true, true, true});
+    CHECK(p.pose().root_position.allFinite());
+    for (const auto& q : p.pose().local) CHECK(q.coeffs().allFinite());
+  }
+  o[0].p.x() = std::numeric_limits<double>::quiet_NaN();
+  CHECK_FALSE(p.step(o, {true, true, true}));
+}
