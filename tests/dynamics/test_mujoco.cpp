@@ -89,6 +89,7 @@ static void crossCheck(const Model& m, const char* tag, unsigned seed) {
     for (int k = 0; k < m.nv; ++k) tau(k) = 10 * n(rng);
     // --- forward dynamics, no damping
     REQUIRE(aba(m, d, q, qd, tau, qdd, 0.0));
+    forwardKinematics(m, d, q, &qd);
     const Mat3<double> R = d.R[0];
     const Vec3<double> w0 = qd.template head<3>(), v0 = qd.template segment<3>(3);
     for (int k = 0; k < m.nq; ++k) md->qpos[g_qperm[k]] = q(k);

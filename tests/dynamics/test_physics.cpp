@@ -37,6 +37,7 @@ TEST_CASE("free-floating tree without gravity conserves momentum; energy drift i
   for (int t = 0; t < 200; ++t) {
     dyn_test::randomState(m, rng, q, qd, 3.0);
     aba(m, d, q, qd, tau, qdd, 0.0);
+    forwardKinematics(m, d, q, &qd);  // world poses (ABA itself does not need them)
     double scale = 0;
     for (int i = 0; i < m.nb; ++i) scale += (m.bodies[i].I * d.a[i]).norm();
     worst = std::max(worst, momentumRate(m, d).norm() / scale);
@@ -85,6 +86,7 @@ TEST_CASE("with gravity and no contact the centre of mass falls at g") {
     dyn_test::randomState(m, rng, q, qd);
     for (int k = 0; k < m.nv; ++k) tau(k) = k < 6 ? 0.0 : 30 * n(rng);  // internal torques only
     aba(m, d, q, qd, tau, qdd, 1.0 / 120);
+    forwardKinematics(m, d, q, &qd);
     Vec3<double> acc = Vec3<double>::Zero();
     for (int i = 0; i < m.nb; ++i) {
       const auto& b = m.bodies[i];

@@ -14,8 +14,8 @@ namespace sparsebody::dynamics {
 // Pass 1: kinematics plus the per-body velocity-product force v x* I v.
 template <class S, int MB, int MD>
 inline void abaKinematics(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecQ& q,
-                          const typename Model<S, MB, MD>::VecV& qd) {
-  forwardKinematics(m, d, q, &qd);
+                          const typename Model<S, MB, MD>::VecV& qd, bool with_world = false) {
+  forwardKinematics(m, d, q, &qd, with_world);
   for (int i = 0; i < m.nb; ++i) d.bias[i] = crossForce(d.v[i], Vec6<S>(m.bodies[i].I * d.v[i]));
 }
 
@@ -56,7 +56,8 @@ inline bool abaSolve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typena
         d.u[i] = tau.template segment<3>(b.v_index) - d.pA[i].template head<3>();
         if (b.parent < 0) continue;
         const Mat63<S> UD = d.U[i] * d.Dinv[i];
-        Ia = IA - UD * d.U[i].transpose();
+        Ia = IA;
+        Ia.noalias() -= UD * d.U[i].transpose();
         pa = d.pA[i] + Ia * d.c[i] + UD * d.u[i];
         break;
       }

@@ -7,7 +7,7 @@ namespace sparsebody::dynamics {
 
 template <class S, int MB, int MD>
 inline void crba(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecQ& q) {
-  forwardKinematics(m, d, q, nullptr);
+  forwardKinematics(m, d, q, nullptr, false);
   for (int i = 0; i < m.nb; ++i) d.Ic[i] = m.bodies[i].I;
   for (int i = m.nb - 1; i >= 0; --i) {
     const int pi = m.bodies[i].parent;

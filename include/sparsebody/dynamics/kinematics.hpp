@@ -51,21 +51,23 @@ inline Vec6<S> jointVelocity(const Model<S, MB, MD>& m, int i, const typename Mo
   return vJ;
 }
 
-// Pass 1: X_i, world pose (R_i, p_i), v_i and c_i. Only positions when qd is null.
+// Pass 1: X_i, world pose (R_i, p_i), v_i and c_i. Only positions when qd is null. ABA and RNEA
+// alone do not need world poses and skip them (with_world = false) to save ~10 % of their time.
 template <class S, int MB, int MD>
 inline void forwardKinematics(const Model<S, MB, MD>& m, Data<S, MB, MD>& d,
                               const typename Model<S, MB, MD>::VecQ& q,
-                              const typename Model<S, MB, MD>::VecV* qd) {
+                              const typename Model<S, MB, MD>::VecV* qd, bool with_world = true) {
   for (int i = 0; i < m.nb; ++i) {
     const int pi = m.bodies[i].parent;
     d.X[i] = jointTransform(m, i, q);
-    const Mat3<S> Rrel = d.X[i].E.transpose();
-    if (pi < 0) {
-      d.R[i] = Rrel;
-      d.p[i] = d.X[i].r;
-    } else {
-      d.R[i] = d.R[pi] * Rrel;
-      d.p[i] = d.p[pi] + d.R[pi] * d.X[i].r;
+    if (with_world) {
+      if (pi < 0) {
+        d.R[i] = d.X[i].E.transpose();
+        d.p[i] = d.X[i].r;
+      } else {
+        d.R[i].noalias() = d.R[pi] * d.X[i].E.transpose();
+        d.p[i].noalias() = d.p[pi] + d.R[pi] * d.X[i].r;
+      }
     }
     if (qd) {
       const Vec6<S> vJ = jointVelocity(m, i, *qd);

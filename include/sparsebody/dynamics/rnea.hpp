@@ -22,7 +22,7 @@ template <class S, int MB, int MD>
 inline void rnea(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecQ& q,
                  const typename Model<S, MB, MD>::VecV& qd, const typename Model<S, MB, MD>::VecV& qdd,
                  typename Model<S, MB, MD>::VecV& tau) {
-  forwardKinematics(m, d, q, &qd);
+  forwardKinematics(m, d, q, &qd, false);
   Vec6<S> a0 = Vec6<S>::Zero();
   a0.template tail<3>() = -m.gravity;
   for (int i = 0; i < m.nb; ++i) {

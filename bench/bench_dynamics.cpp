@@ -1,0 +1,266 @@
+// Dynamics benchmarks: ABA, RNEA, CRBA and a full step (PD + contacts) on the 34-DoF
+// humanoid3d-like tree and on the default avatar, against MuJoCo 2.2.2 (mj_step, mj_forward,
+// mj_rne) on the same exported MJCF. Each MuJoCo benchmark reports `ratio` = MuJoCo time / ours
+// for the matching sparsebody benchmark, timed in the same process (median of 5 chrono batches).
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <fstream>
+#include <random>
+#include <string>
+
+#include "sparsebody/character/avatar.hpp"
+#include "sparsebody/character/humanoid3d.hpp"
+#include "sparsebody/dynamics/aba.hpp"
+#include "sparsebody/dynamics/crba.hpp"
+#include "sparsebody/dynamics/mjcf.hpp"
+#include "sparsebody/dynamics/rnea.hpp"
+#include "sparsebody/dynamics/simulator.hpp"
+#ifdef SPARSEBODY_HAVE_MUJOCO
+#include <mujoco/mujoco.h>
+#endif
+
+using namespace sparsebody;
+using namespace sparsebody::dynamics;
+
+namespace {
+
+using H34 = Model<double, 16, 40>;
+using Av = Model<double, 24, 72>;
+
+template <class M>
+struct Fixture {
+  M m;
+  Data<double, M::kMaxBodies, M::kMaxDofs> d;
+  typename M::VecQ q;
+  typename M::VecV qd, tau, qdd;
+  explicit Fixture(const M& model) : m(model), d(model) {
+    std::mt19937 rng(1);
+    std::normal_distribution<double> n;
+    q = m.neutralConfiguration();
+    for (int i = 0; i < m.nb; ++i) {  // a moderately bent pose
+      const auto& b = m.bodies[i];
+      if (b.joint == JointType::Spherical) {
+        const Quat<double> r = quatExp(Vec3<double>(0.3 * n(rng), 0.3 * n(rng), 0.3 * n(rng)));
+        q(b.q_index) = r.w(); q(b.q_index + 1) = r.x(); q(b.q_index + 2) = r.y(); q(b.q_index + 3) = r.z();
+      } else if (b.joint == JointType::Revolute) {
+        q(b.q_index) = 0.3 * n(rng);
+      }
+    }
+    qd.resize(m.nv);
+    tau.resize(m.nv);
+    for (int k = 0; k < m.nv; ++k) { qd(k) = n(rng); tau(k) = 10 * n(rng); }
+    qdd.setZero(m.nv);
+  }
+};
+
+// Model standing on its feet (root lowered so the foot boxes touch the floor).
+template <class M>
+typename M::VecQ standing(const M& m) {
+  typename M::VecQ q = m.neutralConfiguration();
+  Data<double, M::kMaxBodies, M::kMaxDofs> d(m);
+  forwardKinematics(m, d, q, nullptr);
+  double lo = 1e9;
+  for (int k = 0; k < m.num_points; ++k)
+    lo = std::min(lo, pointPosition(d, m.points[k].body, m.points[k].pos).y() - m.points[k].radius);
+  q(1) -= lo + 0.0005;  // 0.5 mm into the floor
+  return q;
+}
+
+const H34& h34() { static H34 m = character::humanoid3dLike<double>(); return m; }
+const Av& avatar() { static Av m = character::defaultAvatar<double>(); return m; }
+
+// Per-call time of f in microseconds: median of 5 batches.
+template <class F>
+double timeUs(F&& f, int iters) {
+  std::array<double, 5> t{};
+  for (double& x : t) {
+    const auto a = std::chrono::steady_clock::now();
+    for (int i = 0; i < iters; ++i) f();
+    x = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - a).count() / iters;
+  }
+  std::sort(t.begin(), t.end());
+  return t[2];
+}
+
+template <class M>
+void runAba(benchmark::State& st, const M& model) {
+  Fixture<M> f(model);
+  for (auto _ : st) {
+    aba(f.m, f.d, f.q, f.qd, f.tau, f.qdd, 1.0 / 120);
+    benchmark::DoNotOptimize(f.qdd.data());
+  }
+}
+template <class M>
+void runRnea(benchmark::State& st, const M& model) {
+  Fixture<M> f(model);
+  typename M::VecV out(f.m.nv);
+  for (auto _ : st) {
+    rnea(f.m, f.d, f.q, f.qd, f.tau, out);
+    benchmark::DoNotOptimize(out.data());
+  }
+}
+template <class M>
+void runCrba(benchmark::State& st, const M& model) {
+  Fixture<M> f(model);
+  for (auto _ : st) {
+    crba(f.m, f.d, f.q);
+    benchmark::DoNotOptimize(f.d.Mass.data());
+  }
+}
+
+// Full step at 120 Hz: PD servos (kp=200, kd=20, implicit) + contacts, standing; the state is
+// reset every 60 steps so the feet stay on the ground.
+template <class M>
+struct StepRunner {
+  Simulator<double, M::kMaxBodies, M::kMaxDofs> sim;
+  typename M::VecQ q0;
+  typename M::VecV v0;
+  int k = 0;
+  long contacts = 0, steps = 0;
+  explicit StepRunner(const M& m) : sim(m), q0(standing(m)), v0(M::VecV::Zero(m.nv)) { sim.setState(q0, v0); }
+  void operator()() {
+    if (++k == 60) { k = 0; sim.setState(q0, v0); }
+    benchmark::DoNotOptimize(sim.step(1.0 / 120));
+    contacts += sim.numActiveContacts();
+    ++steps;
+  }
+};
+template <class M>
+void runStep(benchmark::State& st, const M& model) {
+  StepRunner<M> r(model);
+  for (auto _ : st) r();
+  st.counters["contacts"] = double(r.contacts) / double(std::max(1L, r.steps));
+}
+
+void BM_ABA_Humanoid34(benchmark::State& st) { runAba(st, h34()); }
+void BM_RNEA_Humanoid34(benchmark::State& st) { runRnea(st, h34()); }
+void BM_CRBA_Humanoid34(benchmark::State& st) { runCrba(st, h34()); }
+void BM_Step_Humanoid34(benchmark::State& st) { runStep(st, h34()); }
+void BM_ABA_Avatar(benchmark::State& st) { runAba(st, avatar()); }
+void BM_RNEA_Avatar(benchmark::State& st) { runRnea(st, avatar()); }
+void BM_CRBA_Avatar(benchmark::State& st) { runCrba(st, avatar()); }
+void BM_Step_Avatar(benchmark::State& st) { runStep(st, avatar()); }
+BENCHMARK(BM_ABA_Humanoid34);
+BENCHMARK(BM_RNEA_Humanoid34);
+BENCHMARK(BM_CRBA_Humanoid34);
+BENCHMARK(BM_Step_Humanoid34);
+BENCHMARK(BM_ABA_Avatar);
+BENCHMARK(BM_RNEA_Avatar);
+BENCHMARK(BM_CRBA_Avatar);
+BENCHMARK(BM_Step_Avatar);
+
+void BM_StepFloat_Humanoid34(benchmark::State& st) {
+  const auto mf = h34().cast<float>();
+  Simulator<float, 16, 40> sim(mf);
+  const auto q0 = standing(h34());
+  Model<float, 16, 40>::VecQ qf = q0.cast<float>();
+  Model<float, 16, 40>::VecV vf = Model<float, 16, 40>::VecV::Zero(mf.nv);
+  sim.setState(qf, vf);
+  int k = 0;
+  for (auto _ : st) {
+    if (++k == 60) { k = 0; sim.setState(qf, vf); }
+    benchmark::DoNotOptimize(sim.step(1.0f / 120));
+  }
+}
+BENCHMARK(BM_StepFloat_Humanoid34);
+
+#ifdef SPARSEBODY_HAVE_MUJOCO
+// MuJoCo on the exported MJCF. contact=false for mj_forward / mj_rne (the ABA / RNEA analogues).
+template <class M>
+struct Mj {
+  mjModel* m = nullptr;
+  mjData* d = nullptr;
+  std::vector<double> qpos0;
+  Mj(const M& model, bool contact, const std::string& tag) {
+    MjcfOptions o;
+    o.contact = contact;
+    o.servo_damping = true;  // kd as MuJoCo joint damping: implicit in its Euler integrator
+    const std::string path = std::string(SPARSEBODY_BENCH_DIR) + "/bench_" + tag + ".xml";
+    std::ofstream(path) << toMjcf(model, o);
+    char err[1000] = "";
+    m = mj_loadXML(path.c_str(), nullptr, err, sizeof err);
+    if (!m) { std::fprintf(stderr, "MuJoCo: %s\n", err); std::abort(); }
+    d = mj_makeData(m);
+    // Standing pose; MuJoCo numbers joints depth-first, so coordinates are placed by joint name.
+    const auto q = standing(model);
+    qpos0.assign(m->nq, 0.0);
+    for (int i = 0; i < model.nb; ++i) {
+      const auto& b = model.bodies[i];
+      const int j = mj_name2id(m, mjOBJ_JOINT, model.names[i].c_str());
+      if (j < 0) continue;
+      for (int k = 0; k < jointNq(b.joint); ++k) qpos0[m->jnt_qposadr[j] + k] = q(b.q_index + k);
+    }
+    reset();
+  }
+  void reset() {
+    mj_resetData(m, d);
+    for (size_t k = 0; k < qpos0.size(); ++k) d->qpos[k] = qpos0[k];
+    mj_forward(m, d);
+  }
+  ~Mj() { mj_deleteData(d); mj_deleteModel(m); }
+};
+
+template <class M>
+void runMjStep(benchmark::State& st, const M& model, const char* tag) {
+  Mj<M> mj(model, true, tag);
+  int k = 0;
+  long con = 0, steps = 0;
+  auto step = [&] {
+    if (++k == 60) { k = 0; mj.reset(); }
+    mj_step(mj.m, mj.d);
+    con += mj.d->ncon;
+    ++steps;
+  };
+  for (auto _ : st) step();
+  st.counters["contacts"] = double(con) / double(std::max(1L, steps));
+  StepRunner<M> ours(model);
+  const double t_ours = timeUs(ours, 2000), t_mj = timeUs(step, 2000);
+  st.counters["ours_us"] = t_ours;
+  st.counters["ratio"] = t_mj / t_ours;
+}
+template <class M>
+void runMjForward(benchmark::State& st, const M& model, const char* tag) {
+  Mj<M> mj(model, false, tag);
+  for (int k = 0; k < mj.m->nv; ++k) mj.d->qvel[k] = 0.1 * (k % 7);
+  auto fwd = [&] { mj_forward(mj.m, mj.d); };
+  for (auto _ : st) fwd();
+  Fixture<M> f(model);
+  const double t_ours = timeUs([&] { aba(f.m, f.d, f.q, f.qd, f.tau, f.qdd, 1.0 / 120); benchmark::DoNotOptimize(f.qdd.data()); }, 20000);
+  const double t_mj = timeUs(fwd, 20000);
+  st.counters["aba_us"] = t_ours;
+  st.counters["ratio"] = t_mj / t_ours;
+}
+template <class M>
+void runMjRne(benchmark::State& st, const M& model, const char* tag) {
+  Mj<M> mj(model, false, tag);
+  mj_forward(mj.m, mj.d);
+  std::vector<double> res(mj.m->nv);
+  auto rne = [&] { mj_rne(mj.m, mj.d, 1, res.data()); benchmark::DoNotOptimize(res.data()); };
+  for (auto _ : st) rne();
+  Fixture<M> f(model);
+  typename M::VecV out(f.m.nv);
+  const double t_ours = timeUs([&] { rnea(f.m, f.d, f.q, f.qd, f.tau, out); benchmark::DoNotOptimize(out.data()); }, 20000);
+  const double t_mj = timeUs(rne, 20000);
+  st.counters["rnea_us"] = t_ours;
+  st.counters["ratio"] = t_mj / t_ours;
+}
+void BM_MjStep_Humanoid34(benchmark::State& st) { runMjStep(st, h34(), "h34_step"); }
+void BM_MjForward_Humanoid34(benchmark::State& st) { runMjForward(st, h34(), "h34_fwd"); }
+void BM_MjRne_Humanoid34(benchmark::State& st) { runMjRne(st, h34(), "h34_rne"); }
+void BM_MjStep_Avatar(benchmark::State& st) { runMjStep(st, avatar(), "avatar_step"); }
+void BM_MjForward_Avatar(benchmark::State& st) { runMjForward(st, avatar(), "avatar_fwd"); }
+void BM_MjRne_Avatar(benchmark::State& st) { runMjRne(st, avatar(), "avatar_rne"); }
+BENCHMARK(BM_MjStep_Humanoid34);
+BENCHMARK(BM_MjForward_Humanoid34);
+BENCHMARK(BM_MjRne_Humanoid34);
+BENCHMARK(BM_MjStep_Avatar);
+BENCHMARK(BM_MjForward_Avatar);
+BENCHMARK(BM_MjRne_Avatar);
+#endif
+
+}  // namespace
+
+BENCHMARK_MAIN();
