@@ -52,10 +52,10 @@ struct N3PConfig {
   trackers::SanitizerConfig sanitizer{};
 };
 
-template <typename T = float, int HSig = 64, int HLo = 128, int HUp = 128>
+template <typename T = float, int HSig = 64, int HLo = 128, int HUp = 128, typename W = T>
 class N3PPipeline {
  public:
-  using Predictor = N3PPredictor<T, HSig, HLo, HUp>;
+  using Predictor = N3PPredictor<T, HSig, HLo, HUp, W>;
   using Weights = typename Predictor::Weights;
 
   // prefix ("…/n3p") or any of the three files; throws LoadError.

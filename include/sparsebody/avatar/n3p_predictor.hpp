@@ -94,13 +94,14 @@ struct N3PMeta {
   }
 };
 
-// HSig, HLo, HUp: hidden sizes of G_sig, G_lo, G_up (paper: 64, 128, 128).
-template <typename T = float, int HSig = 64, int HLo = 128, int HUp = 128>
+// HSig, HLo, HUp: hidden sizes of G_sig, G_lo, G_up (paper: 64, 128, 128). W: stored weight type
+// (T, or nn::f16 to halve the weight bytes read per frame).
+template <typename T = float, int HSig = 64, int HLo = 128, int HUp = 128, typename W = T>
 class N3PPredictor {
  public:
-  using SigNet = networks::N3PPredictorNet<T, n3p::kSigIn, HSig, n3p::kSigOut>;
-  using LoNet = networks::N3PPredictorNet<T, n3p::kLoIn, HLo, n3p::kLoOut>;
-  using UpNet = networks::N3PPredictorNet<T, n3p::kUpIn, HUp, n3p::kUpOut>;
+  using SigNet = networks::N3PPredictorNet<T, n3p::kSigIn, HSig, n3p::kSigOut, 3, W>;
+  using LoNet = networks::N3PPredictorNet<T, n3p::kLoIn, HLo, n3p::kLoOut, 3, W>;
+  using UpNet = networks::N3PPredictorNet<T, n3p::kUpIn, HUp, n3p::kUpOut, 3, W>;
 
   // The three weights files, shared (read-only) between any number of predictors.
   struct Weights {

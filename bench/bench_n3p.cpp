@@ -1,0 +1,106 @@
+// Per-frame cost of Neural3Points at the paper's sizes (G_sig 64, G_lo 128, G_up 128 hidden, 3 GRU
+// layers each), float, on the default weights:
+//   BM_N3PPredictorStep     one Eq. (2) step: 3 tracker transforms, 3 networks, heading update, pose
+//   BM_N3PPredictorHmdOnly  the same with both controllers from o* (§8.2)
+//   BM_N3PPredictorStepF16  one step with the weights stored as float16 (half the bytes to read)
+//   BM_N3PPipelineFrame     a whole 30 Hz frame of the direct-mode pipeline (resampling, checks,
+//                           calibration, predictor, foot pinning and arm IK)
+// Input: a synthetic user walking a circle and waving (no data files needed besides the weights).
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+
+#include "sparsebody/avatar/n3p_direct.hpp"
+
+using namespace sparsebody;
+
+namespace {
+using Pipeline = avatar::N3PPipeline<float, 64, 128, 128>;
+
+template <class P = Pipeline>
+const typename P::Weights* weights() {
+  static typename P::Weights w;
+  static bool tried = false, ok = false;
+  if (!tried) {
+    tried = true;
+    try {
+      w = P::load(SPARSEBODY_N3P_WEIGHTS);
+      ok = true;
+    } catch (const std::exception&) {
+    }
+  }
+  return ok ? &w : nullptr;
+}
+
+trackers::TrackerFrame frame(int t) {
+  const double a = 0.02 * t, s = std::sin(0.3 * t);
+  trackers::TrackerFrame f;
+  f.time = t / 30.0;
+  const Eigen::Vector3d c(1.5 * std::sin(a), 0, 1.5 * std::cos(a));
+  const Eigen::Quaterniond yaw(Eigen::AngleAxisd(a + M_PI / 2, Eigen::Vector3d::UnitY()));
+  const Eigen::Vector3d pos[3] = {c + Eigen::Vector3d(0, 1.38, 0), c + yaw * Eigen::Vector3d(0.35, 1.0 + 0.2 * s, -0.2),
+                                  c + yaw * Eigen::Vector3d(-0.35, 1.0 - 0.2 * s, -0.2)};
+  for (int k = 0; k < 3; ++k) {
+    f.pose[k].position = trackers::to_xr(pos[k]);
+    f.pose[k].orientation = trackers::to_xr(yaw);
+    f.valid[k] = true;
+  }
+  return f;
+}
+
+features::n3p::TrackerSet samples(int t) {
+  const auto f = frame(t);
+  features::n3p::TrackerSet o;
+  for (int k = 0; k < 3; ++k)
+    o[k] = features::n3p::TrackerSample::from(trackers::to_eigen(f.pose[k].position),
+                                              trackers::to_eigen(f.pose[k].orientation).toRotationMatrix());
+  return o;
+}
+
+template <class P>
+void predictor(benchmark::State& state, bool hmd_only) {
+  using Predictor = typename P::Predictor;
+  const auto* w = weights<P>();
+  if (!w) {
+    state.SkipWithError("default weights not found: " SPARSEBODY_N3P_WEIGHTS "_*.json");
+    return;
+  }
+  Predictor p(*w);
+  std::vector<features::n3p::TrackerSet> in;
+  for (int t = 0; t < 300; ++t) in.push_back(samples(t));
+  const std::array<bool, 3> present{true, !hmd_only, !hmd_only};
+  std::size_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(p.step(in[i], present));
+    benchmark::DoNotOptimize(p.pose().root_position.data());
+    if (++i == in.size()) i = 0;
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+void BM_N3PPredictorStep(benchmark::State& s) { predictor<Pipeline>(s, false); }
+void BM_N3PPredictorHmdOnly(benchmark::State& s) { predictor<Pipeline>(s, true); }
+void BM_N3PPredictorStepF16(benchmark::State& s) {
+  predictor<avatar::N3PPipeline<float, 64, 128, 128, nn::f16>>(s, false);
+}
+
+void BM_N3PPipelineFrame(benchmark::State& state) {
+  const auto* w = weights<Pipeline>();
+  if (!w) {
+    state.SkipWithError("default weights not found");
+    return;
+  }
+  Pipeline p(*w);
+  int t = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(p.push(frame(t++)));
+    benchmark::DoNotOptimize(p.world().position.data());
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+}  // namespace
+
+BENCHMARK(BM_N3PPredictorStep);
+BENCHMARK(BM_N3PPredictorHmdOnly);
+BENCHMARK(BM_N3PPredictorStepF16);
+BENCHMARK(BM_N3PPipelineFrame);
+BENCHMARK_MAIN();
