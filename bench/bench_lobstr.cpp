@@ -37,7 +37,7 @@ template <int H>
 std::shared_ptr<const typename avatar::LoBSTrPipeline<float, H, 128>::Weights> weights() {
   using W = typename avatar::LoBSTrPipeline<float, H, 128>::Weights;
   if constexpr (H == 256) {
-    return W::load(SPARSEBODY_LOBSTR_WEIGHTS);
+    return avatar::LoBSTrPipeline<float, H, 128>::load(SPARSEBODY_LOBSTR_WEIGHTS);
   } else {  // paper size: random tensors, the shipped file's metadata and input normalisation
     io::WeightsDocument doc = io::read_weights_file(SPARSEBODY_LOBSTR_WEIGHTS);
     doc.tensors = sparsebody_test::random_lobstr_table(H, 128, 11);

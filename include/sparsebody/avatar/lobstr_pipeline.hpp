@@ -38,7 +38,7 @@ struct LoBSTrConfig {
   RunMode mode = RunMode::Streaming;
   int window = 0;                  // window-mode frames; 0: 1 s at the model rate
   double contact_threshold = 0.5;  // P(contact) above which a foot is in contact
-  double lock_max_drift = 0.15;    // m: release a lock the network's toe has left this far (standard scale)
+  double lock_max_drift = 0.10;    // m: release a lock the network's toe has left this far (standard scale)
   bool contact_ik = true;          // §3.4.1 post-processing
   bool upper_body_ik = true;
   trackers::SanitizerConfig sanitizer{};
@@ -50,6 +50,7 @@ struct LoBSTrMeta {
   int lower[8] = {};            // joint indices of the 8 predicted joints
   double frame_rate = 30;
   double standing_hips_height = 0.9, standing_head_height = 1.38;
+  double toe_height = 0.042;    // standing height of the toe-base joint above the floor
 
   static LoBSTrMeta from(const io::ModelInfo& info) {
     const std::string& src = info.source;
@@ -70,6 +71,7 @@ struct LoBSTrMeta {
       throw LoadError(src, "meta.rotation: expected {\"representation\": \"6d\", \"layout\": \"columns\", \"columns\": [2, 1]}");
     m.standing_hips_height = j.value("standing_hips_height", m.standing_hips_height);
     m.standing_head_height = j.value("standing_head_height", m.standing_head_height);
+    m.toe_height = j.value("toe_height", m.toe_height);
     return m;
   }
 };
@@ -283,7 +285,7 @@ class LoBSTrPipeline {
       const Eigen::Vector3d hip = world_.position[ul];
       const double reach = 1.02 * (s.offsets[ll].norm() + s.offsets[ft].norm()) + s.offsets[toe].norm();
       Eigen::Vector3d target;
-      if (!lock_[foot].update(contact(foot), world_.position[toe], hip, reach, cfg_.lock_max_drift, target)) continue;
+      if (!lock_[foot].update(contact(foot), world_.position[toe], hip, reach, cfg_.lock_max_drift, meta_.toe_height, target)) continue;
       // ankle target keeps the foot's world orientation: ankle = target - (toe - ankle)
       const Eigen::Vector3d ankle_t = target - (world_.position[toe] - world_.position[ft]);
       const Eigen::Vector3d a = world_.position[ul], b = world_.position[ll], c = world_.position[ft];

@@ -1,6 +1,7 @@
 // Foot contact post-processing (paper §3.4.1), one foot:
-//   contact turns on   -> the toe-base position at that frame becomes the lock target; leg IK
-//                         holds the toe there while contact stays on;
+//   contact turns on   -> the toe-base position at that frame, put at its standing height above
+//                         the floor, becomes the lock target; leg IK holds the toe there while
+//                         contact stays on;
 //   contact turns off  -> for `blend_frames` (10) frames the target moves from the lock position
 //                         to the network's toe position with the slow-in-slow-out weight
 //                         w_k = (1 - cos(pi k / n)) / 2 (a shifted sine), then IK stops;
@@ -26,7 +27,7 @@ class FootLock {
   // One frame: contact state, the network's toe position, the hip position and the leg's reach.
   // Returns true when IK must place the toe at `target`.
   bool update(bool contact, const Eigen::Vector3d& toe, const Eigen::Vector3d& hip, double max_reach,
-              double max_drift, Eigen::Vector3d& target) noexcept {
+              double max_drift, double toe_height, Eigen::Vector3d& target) noexcept {
     const bool network_contact = contact;
     if (state_ == State::Locked && ((lock_ - hip).norm() > max_reach || (lock_ - toe).norm() > max_drift)) {
       contact = false;
@@ -36,7 +37,7 @@ class FootLock {
     if (hold_off_) contact = false;
     switch (state_) {
       case State::Free:
-        if (contact) { state_ = State::Locked; lock_ = toe; }
+        if (contact) { state_ = State::Locked; lock_ = toe; lock_.y() = toe_height; }
         break;
       case State::Locked:
         if (!contact) { state_ = State::Blending; from_ = lock_; k_ = 0; }
