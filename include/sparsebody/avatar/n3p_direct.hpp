@@ -5,7 +5,7 @@
 //     -> N3PCalibration (device -> head / wrist joints, height scale, §7)
 //     -> N3PPredictor (Eq. (2): G_sig -> G_lo -> heading update -> G_up; o* for missing controllers)
 //     -> direct-mode IK (§7, "to enforce foot contacts and achieve accurate tracker positions"):
-//        feet in contact (c > threshold) are pinned with pose::FootLock and two-bone leg IK;
+//        feet in contact (c > threshold) are pinned (FootPin below) with two-bone leg IK;
 //        hands are put on the measured controllers with two-bone arm IK.
 //
 // Tracker modes, per frame from the validity flags (§8.2): 3-point; one controller (the missing one
@@ -30,12 +30,12 @@
 //   for (frame : frames) { p.push(frame); if (p.has_output()) use(p.pose(), p.world(), p.user_scale()); }
 #pragma once
 #include <array>
+#include <cmath>
 #include <string>
 
 #include "sparsebody/avatar/n3p_predictor.hpp"
 #include "sparsebody/features/n3p_calibration.hpp"
 #include "sparsebody/pose/body_pose.hpp"
-#include "sparsebody/pose/contact.hpp"
 #include "sparsebody/pose/ik.hpp"
 #include "sparsebody/trackers/resampler.hpp"
 #include "sparsebody/trackers/sanitizer.hpp"
@@ -50,6 +50,56 @@ struct N3PConfig {
   double controller_max_distance = 1.5;  // from the headset (m, user's size); further: missing
   double foot_max_drift = 0.3;     // a pinned foot further than this from the prediction is released (m)
   trackers::SanitizerConfig sanitizer{};
+};
+
+// Direct-mode foot pinning, one foot (the ankle joint):
+//   contact on              -> the ankle position of that frame becomes the pin; leg IK holds it;
+//   contact off, or the pin out of the leg's reach from the hip, or further than `max_drift` from
+//   the predicted ankle     -> released over `blend` frames: the target moves from the pin to the
+//                              prediction with w_k = (1 - cos(pi k / n)) / 2; a pin released for
+//                              distance is not re-made until the contact flag goes off once.
+class FootPin {
+ public:
+  enum class State { Free, Pinned, Releasing };
+  explicit FootPin(int blend = 8) : n_(blend) {}
+  void reset() noexcept { state_ = State::Free; hold_off_ = false; }
+  State state() const noexcept { return state_; }
+
+  // Returns true when IK must put the ankle at `target`.
+  bool update(bool contact, const Eigen::Vector3d& ankle, const Eigen::Vector3d& hip, double reach, double max_drift,
+              Eigen::Vector3d& target) noexcept {
+    if (!contact) hold_off_ = false;
+    if (state_ == State::Pinned && ((pin_ - hip).norm() > reach || (pin_ - ankle).norm() > max_drift)) {
+      hold_off_ = true;
+      contact = false;
+    }
+    contact = contact && !hold_off_;
+    if (contact && state_ != State::Pinned) {
+      pin_ = state_ == State::Releasing ? current_ : ankle;
+      state_ = State::Pinned;
+    } else if (!contact && state_ == State::Pinned) {
+      state_ = State::Releasing;
+      from_ = pin_;
+      k_ = 0;
+    }
+    if (state_ == State::Pinned) {
+      target = current_ = pin_;
+      return true;
+    }
+    if (state_ == State::Releasing) {
+      const double w = 0.5 - 0.5 * std::cos(M_PI * ++k_ / n_);
+      target = current_ = (1 - w) * from_ + w * ankle;
+      if (k_ >= n_) state_ = State::Free;
+      return true;
+    }
+    return false;
+  }
+
+ private:
+  int n_, k_ = 0;
+  State state_ = State::Free;
+  bool hold_off_ = false;
+  Eigen::Vector3d pin_ = Eigen::Vector3d::Zero(), from_ = Eigen::Vector3d::Zero(), current_ = Eigen::Vector3d::Zero();
 };
 
 template <typename T = float, int HSig = 64, int HLo = 128, int HUp = 128, typename W = T>
@@ -151,7 +201,7 @@ class N3PPipeline {
   const Predictor& predictor() const noexcept { return pred_; }
   double contact_probability(int foot) const noexcept { return pred_.contact(foot); }
   bool contact(int foot) const noexcept { return contact_probability(foot) > cfg_.contact_threshold; }
-  bool foot_locked(int foot) const noexcept { return lock_[foot].state() != pose::FootLock::State::Free; }
+  bool foot_locked(int foot) const noexcept { return lock_[foot].state() != FootPin::State::Free; }
   // Controllers replaced by o* in the last frame (0: 3-point, 1: one controller, 2: HMD only).
   int predicted_controllers() const noexcept { return pred_.substituted(1) + pred_.substituted(2); }
   long long frames() const noexcept { return frames_; }
@@ -185,7 +235,7 @@ class N3PPipeline {
     return ok;
   }
 
-  // Feet in contact stay where contact began (pose::FootLock), the leg bent to reach them.
+  // Feet in contact stay where contact began (FootPin), the leg bent to reach them.
   void pin_feet() noexcept {
     for (int side = 0; side < 2; ++side) {
       const int* l = leg_[side];
@@ -223,7 +273,7 @@ class N3PPipeline {
   features::n3p::N3PCalibration calib_;
   pose::BodyPose pose_, last_pose_;
   pose::WorldPose world_, last_world_;
-  pose::FootLock lock_[2];
+  FootPin lock_[2];
   int arm_[2][3] = {}, leg_[2][3] = {};
   double reach_[2] = {};
   long long frames_ = 0;
