@@ -141,9 +141,17 @@ TEST_CASE("n3p calibration (§7): T-pose offsets put the devices' joints at the 
     // calibrated orientation = the facing frame at calibration
     CHECK((j.fwd - yaw.col(2)).norm() < 1e-5);
   }
-  // not a T-pose: controllers at the head
+  CHECK(c.hand_offsets);
+  // not a T-pose (a controller at the head): orientations and scale only, no wrist offsets
   f.pose[1].position = f.pose[0].position;
+  REQUIRE(c.from_tpose(f, s, 0.908, 1.378));
+  CHECK_FALSE(c.hand_offsets);
+  CHECK(c.offset[1].norm() == 0.0);
+  CHECK(c.offset[2].norm() == 0.0);
+  // no usable headset: unchanged, false
+  f.valid[0] = false;
   CHECK_FALSE(c.from_tpose(f, s, 0.908, 1.378));
+  CHECK(c.base.scale == doctest::Approx(1 / user).epsilon(1e-6));
 }
 
 TEST_CASE("n3p pipeline: bad input never produces a NaN and is handled as defined") {

@@ -6,6 +6,7 @@ Reproduce the default weights (examples/weights/n3p_*.json), from the repository
   python3 -m weights_tool.n3p train --train /tmp/n3p/train.npz --val /tmp/n3p/val.npz --out /tmp/n3p/n3p.pt
   python3 -m weights_tool.n3p export /tmp/n3p/n3p.pt /tmp/n3p/train.npz examples/weights/n3p
   python3 -m weights_tool.n3p evaluate examples/weights/n3p /tmp/n3p/val.npz
+  python3 -m weights_tool.n3p golden tests/n3p/golden --default examples/weights/n3p   # C++ parity goldens
 """
 import argparse
 import json
@@ -55,8 +56,13 @@ def main(argv=None):
     elif cmd == "golden":
         from . import golden
         p.add_argument("out_dir")
+        p.add_argument("--default", default=None, metavar="PREFIX",
+                       help="also write n3p_default.golden.json for the weights at PREFIX (e.g. examples/weights/n3p)")
         a = p.parse_args(rest)
         print(golden.write(a.out_dir))
+        if a.default:
+            import os
+            print(golden.write_default(a.default, os.path.join(a.out_dir, "n3p_default.golden.json")))
     else:
         print(f"unknown command {cmd!r}\n{__doc__}")
         return 2

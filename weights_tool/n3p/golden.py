@@ -80,3 +80,33 @@ def write(out_dir):
     with open(prefix + ".golden.json", "w") as f:
         json.dump(g, f, separators=(",", ":"))
     return prefix
+
+
+def write_default(prefix, out_path, frames=100):
+    """Golden of the default (trained, paper-size) weights at `prefix` over CMU 01_01: 3-point, then
+    HMD-only for frames 40-69. Same fields as write(). Regenerate whenever the default weights change."""
+    from .weights import load
+    nets, init = load(prefix)
+    TP, TQ6 = cmu_trackers(frames=frames)
+    F = len(TP)
+    present = np.ones((F, 3), bool)
+    present[40:70, 1:] = False
+    d = torch.float64
+    tp, tq = torch.tensor(TP, dtype=d)[None], torch.tensor(TQ6, dtype=d)[None]
+    o0 = torch.tensor(init["o"], dtype=d)[None]
+    h0 = initial_heading(tp[:, 0], tq[:, 0], o0)
+    with torch.no_grad():
+        out, _, _ = rollout(nets, tp, tq, h0, torch.tensor(init["g_lo"], dtype=d)[None],
+                            torch.tensor(init["g_up"], dtype=d)[None], o0, torch.tensor(present)[None])
+        P, _ = world_pose(out["h"][0], out["glo"][0], out["gup"][0])
+    r = lambda a: np.round(np.asarray(a, dtype=np.float64), 9).tolist()
+    g = {"source": f"CMU 01_01 (resampled to 30 fps), default weights {os.path.basename(prefix)}_*.json; "
+                   "weights_tool.n3p golden --default", "frames": F, "state_every": STATE_EVERY,
+         "trackers_p": TP.reshape(F, 9).tolist(), "trackers_q6": TQ6.reshape(F, 18).tolist(),
+         "present": present.astype(int).tolist(),
+         "h": r(out["h"][0]), "z": r(out["z"][0]), "o_star": r(out["ostar"][0]),
+         "g_lo": r(out["glo"][0][::STATE_EVERY]), "g_up": r(out["gup"][0][::STATE_EVERY]),
+         "positions": r(P.reshape(F, -1))}
+    with open(out_path, "w") as f:
+        json.dump(g, f, separators=(",", ":"))
+    return out_path

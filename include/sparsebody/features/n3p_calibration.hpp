@@ -52,10 +52,13 @@ struct N3PCalibration {
   std::array<Eigen::Vector3d, kTrackers> offset{       // d_k, device frame, metres (user's size)
       Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
 
-  // From a T-pose frame (head and both controllers valid). False (unchanged) when unusable.
+  bool hand_offsets = false;  // whether d_1, d_2 were measured (a plausible T-pose)
+
+  // From a T-pose frame. False (unchanged) when the headset part cannot be used. The wrist offsets
+  // are measured only when both controllers are valid and within 0.5 m of where a T-pose puts the
+  // wrists (otherwise they stay zero: the controllers are taken as the wrists, hand_offsets false).
   bool from_tpose(const trackers::TrackerFrame& f, const pose::Skeleton& skeleton, double standard_hips_height,
                   double standard_head_height) noexcept {
-    if (!f.valid[0] || !f.valid[1] || !f.valid[2]) return false;
     N3PCalibration c;
     // the pelvis tracker plays no part here: calibrate orientations and scale from the headset
     trackers::TrackerFrame g = f;
@@ -65,14 +68,16 @@ struct N3PCalibration {
     const Eigen::Matrix3d yaw = trackers::yaw_frame(-(qh * Eigen::Vector3d::UnitZ()), Eigen::Matrix3d::Identity());
     const Eigen::Vector3d head = trackers::to_eigen(f.pose[0].position);
     const std::array<Eigen::Vector3d, 2> w = tpose_wrists(skeleton);
-    for (int k = 1; k < 3; ++k) {
+    bool ok = f.valid[1] && f.valid[2];
+    for (int k = 1; k < 3 && ok; ++k) {
       const Eigen::Quaterniond q = trackers::to_eigen(f.pose[k].orientation).normalized();
       const Eigen::Vector3d p = trackers::to_eigen(f.pose[k].position);
-      if (!p.allFinite() || !q.coeffs().allFinite()) return false;
       const Eigen::Vector3d wrist = head + yaw * (w[k - 1] / c.base.scale);
       c.offset[k] = q.conjugate() * (wrist - p);
-      if (!(c.offset[k].norm() < 0.5)) return false;  // not a T-pose (devices far from the wrists)
+      ok = p.allFinite() && q.coeffs().allFinite() && c.offset[k].norm() < 0.5;  // else: not a T-pose
     }
+    if (!ok) c.offset[1] = c.offset[2] = Eigen::Vector3d::Zero();
+    c.hand_offsets = ok;
     *this = c;
     return true;
   }
