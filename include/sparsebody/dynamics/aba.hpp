@@ -52,12 +52,22 @@ inline bool abaSolve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typena
         d.U[i] = IA.template leftCols<3>();
         Mat3<S> D = IA.template topLeftCorner<3, 3>();
         D.diagonal().array() += kdamp;
-        d.Dinv[i] = D.inverse();
+        d.Dinv[i] = inverseSym3(D);
+        if (!(D(0, 0) > S(0)) || !d.Dinv[i].allFinite()) ok = false;
         d.u[i] = tau.template segment<3>(b.v_index) - d.pA[i].template head<3>();
         if (b.parent < 0) continue;
-        const Mat63<S> UD = d.U[i] * d.Dinv[i];
-        Ia = IA;
-        Ia.noalias() -= UD * d.U[i].transpose();
+        // I^a = I^A - U D^-1 U^T, symmetric: lower triangle by loops, then mirrored.
+        const Mat63<S>& U = d.U[i];
+        Mat63<S> UD;
+        for (int c = 0; c < 3; ++c)
+          for (int r = 0; r < 6; ++r)
+            UD(r, c) = U(r, 0) * d.Dinv[i](0, c) + U(r, 1) * d.Dinv[i](1, c) + U(r, 2) * d.Dinv[i](2, c);
+        for (int c = 0; c < 6; ++c)
+          for (int r = c; r < 6; ++r) {
+            const S v = IA(r, c) - (UD(r, 0) * U(c, 0) + UD(r, 1) * U(c, 1) + UD(r, 2) * U(c, 2));
+            Ia(r, c) = v;
+            Ia(c, r) = v;
+          }
         pa = d.pA[i] + Ia * d.c[i] + UD * d.u[i];
         break;
       }

@@ -14,26 +14,29 @@ inline Quat<S> readQuat(const VecQ& q, int k) {
   return r;
 }
 
-// Parent->child transform X = X_J(q) X_T. The child orientation in the parent is R_T R_J, so
-// E = (R_T R_J)^T; the free root ignores X_T (its coordinates are the pose itself).
+// Parent->child transform X = X_J(q) X_T, written into X. The child orientation in the parent is
+// R_T R_J, so E = (R_T R_J)^T = R_J^T E_T; the product is skipped when X_T has no rotation (the
+// usual case). The free root ignores X_T (its coordinates are the pose itself).
 template <class S, int MB, int MD>
-inline Transform<S> jointTransform(const Model<S, MB, MD>& m, int i,
-                                   const typename Model<S, MB, MD>::VecQ& q) {
+inline void jointTransform(const Model<S, MB, MD>& m, int i, const typename Model<S, MB, MD>::VecQ& q, Transform<S>& X) {
   const Body<S>& b = m.bodies[i];
-  Transform<S> X = b.XT;
+  const int k = b.q_index;
+  X.r = b.XT.r;
   switch (b.joint) {
     case JointType::Free:
-      X.E = readQuat<S>(q, b.q_index + 3).toRotationMatrix().transpose();
-      X.r = q.template segment<3>(b.q_index);
-      break;
-    case JointType::Spherical:
-      X.E = readQuat<S>(q, b.q_index).toRotationMatrix().transpose() * b.XT.E;
-      break;
-    case JointType::Revolute:
-      X.E = Eigen::AngleAxis<S>(q(b.q_index), b.axis).toRotationMatrix().transpose() * b.XT.E;
-      break;
-    case JointType::Fixed: break;
+      quatToTransposedRotation(q(k + 3), q(k + 4), q(k + 5), q(k + 6), X.E);
+      X.r = q.template segment<3>(k);
+      return;
+    case JointType::Spherical: quatToTransposedRotation(q(k), q(k + 1), q(k + 2), q(k + 3), X.E); break;
+    case JointType::Revolute: X.E = Eigen::AngleAxis<S>(q(k), b.axis).toRotationMatrix().transpose(); break;
+    case JointType::Fixed: X.E = b.XT.E; return;
   }
+  if (!b.XT_identity) X.E = (X.E * b.XT.E).eval();
+}
+template <class S, int MB, int MD>
+inline Transform<S> jointTransform(const Model<S, MB, MD>& m, int i, const typename Model<S, MB, MD>::VecQ& q) {
+  Transform<S> X;
+  jointTransform(m, i, q, X);
   return X;
 }
 
@@ -59,7 +62,7 @@ inline void forwardKinematics(const Model<S, MB, MD>& m, Data<S, MB, MD>& d,
                               const typename Model<S, MB, MD>::VecV* qd, bool with_world = true) {
   for (int i = 0; i < m.nb; ++i) {
     const int pi = m.bodies[i].parent;
-    d.X[i] = jointTransform(m, i, q);
+    jointTransform(m, i, q, d.X[i]);
     if (with_world) {
       if (pi < 0) {
         d.R[i] = d.X[i].E.transpose();

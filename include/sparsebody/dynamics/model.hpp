@@ -46,6 +46,7 @@ struct Body {
   int q_index = 0, v_index = 0;
   Mat6<S> I = Mat6<S>::Zero();          // spatial inertia about the body origin
   Transform<S> XT;                      // parent -> joint frame at zero joint coordinates
+  bool XT_identity = true;              // X_T has no rotation (lets FK skip a 3x3 product)
 };
 
 // A contact point fixed on a body (derived from shapes).
@@ -110,6 +111,7 @@ struct Model {
       b.I = rigidInertia(b.mass, b.com, b.inertia);
       b.XT.E = b.rot.normalized().toRotationMatrix().transpose();
       b.XT.r = b.pos;
+      b.XT_identity = (b.XT.E - Mat3<S>::Identity()).cwiseAbs().maxCoeff() == S(0);
       if (b.joint == JointType::Revolute) b.axis.normalize();
       for (int s = 0; s < b.num_shapes; ++s) addPoints(i, b.shapes[s]);
     }

@@ -31,25 +31,45 @@ struct Transform {
   Mat3<S> E = Mat3<S>::Identity();
   Vec3<S> r = Vec3<S>::Zero();
 
+  // The three products below are written out by component: for 3-vectors Eigen's packet code
+  // (AVX-512 here) costs more than it saves, and these run ~4 times per body per ABA call.
   // m_B = X m_A (motion vectors).
   Vec6<S> apply(const Vec6<S>& m) const {
+    const S wx = m(0), wy = m(1), wz = m(2);
+    const S ux = m(3) - (r.y() * wz - r.z() * wy);  // v - r x w
+    const S uy = m(4) - (r.z() * wx - r.x() * wz);
+    const S uz = m(5) - (r.x() * wy - r.y() * wx);
     Vec6<S> out;
-    out.template head<3>() = E * m.template head<3>();
-    out.template tail<3>() = E * (m.template tail<3>() - r.cross(m.template head<3>()));
+    out(0) = E(0, 0) * wx + E(0, 1) * wy + E(0, 2) * wz;
+    out(1) = E(1, 0) * wx + E(1, 1) * wy + E(1, 2) * wz;
+    out(2) = E(2, 0) * wx + E(2, 1) * wy + E(2, 2) * wz;
+    out(3) = E(0, 0) * ux + E(0, 1) * uy + E(0, 2) * uz;
+    out(4) = E(1, 0) * ux + E(1, 1) * uy + E(1, 2) * uz;
+    out(5) = E(2, 0) * ux + E(2, 1) * uy + E(2, 2) * uz;
     return out;
   }
   // m_A = X^-1 m_B (motion vectors, child to parent).
   Vec6<S> applyInverse(const Vec6<S>& m) const {
     Vec6<S> out;
-    out.template head<3>() = E.transpose() * m.template head<3>();
-    out.template tail<3>() = E.transpose() * m.template tail<3>() + r.cross(Vec3<S>(out.template head<3>()));
+    for (int k = 0; k < 3; ++k) {
+      out(k) = E(0, k) * m(0) + E(1, k) * m(1) + E(2, k) * m(2);
+      out(3 + k) = E(0, k) * m(3) + E(1, k) * m(4) + E(2, k) * m(5);
+    }
+    out(3) += r.y() * out(2) - r.z() * out(1);  // + r x w_A
+    out(4) += r.z() * out(0) - r.x() * out(2);
+    out(5) += r.x() * out(1) - r.y() * out(0);
     return out;
   }
   // f_A = X^T f_B: a force on the child expressed in the parent (X^* inverse = X^T).
   Vec6<S> applyTransposeForce(const Vec6<S>& f) const {
     Vec6<S> out;
-    out.template tail<3>() = E.transpose() * f.template tail<3>();
-    out.template head<3>() = E.transpose() * f.template head<3>() + r.cross(Vec3<S>(out.template tail<3>()));
+    for (int k = 0; k < 3; ++k) {
+      out(k) = E(0, k) * f(0) + E(1, k) * f(1) + E(2, k) * f(2);
+      out(3 + k) = E(0, k) * f(3) + E(1, k) * f(4) + E(2, k) * f(5);
+    }
+    out(0) += r.y() * out(5) - r.z() * out(4);  // + r x f_A
+    out(1) += r.z() * out(3) - r.x() * out(5);
+    out(2) += r.x() * out(4) - r.y() * out(3);
     return out;
   }
   // Composition: (this * other) = C_X_A when this = C_X_B and other = B_X_A.
@@ -72,18 +92,58 @@ struct Transform {
 // With I = [A B; B^T C] the rotated blocks A' = E^T A E etc. are then shifted by r:
 //   A_p = A' - B' r^ + r^ B'^T - r^ C' r^,  B_p = B' + r^ C',  C_p = C'.
 // All 3x3 products; about 3x cheaper than two dense 6x6 products.
+// Small dense products written as plain loops: for 3x3 blocks they compile to straight-line FMAs,
+// which beats Eigen's packet path at this size.
+template <class S>
+inline Mat3<S> mul33(const Mat3<S>& A, const Mat3<S>& B) {  // A B
+  Mat3<S> C;
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) C(i, j) = A(i, 0) * B(0, j) + A(i, 1) * B(1, j) + A(i, 2) * B(2, j);
+  return C;
+}
+template <class S>
+inline Mat3<S> mulT33(const Mat3<S>& A, const Mat3<S>& B) {  // A^T B
+  Mat3<S> C;
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) C(i, j) = A(0, i) * B(0, j) + A(1, i) * B(1, j) + A(2, i) * B(2, j);
+  return C;
+}
+// Inverse of a symmetric 3x3 matrix by cofactors (D_i of a spherical joint is SPD).
+template <class S>
+inline Mat3<S> inverseSym3(const Mat3<S>& D) {
+  const S a = D(0, 0), b = D(1, 0), c = D(2, 0), e = D(1, 1), f = D(2, 1), g = D(2, 2);
+  const S A = e * g - f * f, B = c * f - b * g, C = b * f - c * e;
+  const S inv = S(1) / (a * A + b * B + c * C);
+  Mat3<S> R;
+  R(0, 0) = A * inv; R(1, 0) = B * inv; R(2, 0) = C * inv;
+  R(1, 1) = (a * g - c * c) * inv; R(2, 1) = (b * c - a * f) * inv; R(2, 2) = (a * e - b * b) * inv;
+  R(0, 1) = R(1, 0); R(0, 2) = R(2, 0); R(1, 2) = R(2, 1);
+  return R;
+}
+
+// r^ M (cross product of r with each column of M).
+template <class S>
+inline Mat3<S> crossMat(const Vec3<S>& r, const Mat3<S>& M) {
+  Mat3<S> C;
+  for (int j = 0; j < 3; ++j) {
+    C(0, j) = r.y() * M(2, j) - r.z() * M(1, j);
+    C(1, j) = r.z() * M(0, j) - r.x() * M(2, j);
+    C(2, j) = r.x() * M(1, j) - r.y() * M(0, j);
+  }
+  return C;
+}
+
 template <class S>
 inline void addTransformedInertia(const Transform<S>& X, const Mat6<S>& I, Mat6<S>& out) {
-  const Mat3<S> Et = X.E.transpose();
-  const Mat3<S> A = Et * I.template topLeftCorner<3, 3>() * X.E;
-  const Mat3<S> B = Et * I.template topRightCorner<3, 3>() * X.E;
-  const Mat3<S> C = Et * I.template bottomRightCorner<3, 3>() * X.E;
-  const Mat3<S> rx = skew(X.r);
-  const Mat3<S> rxC = rx * C;
+  const Mat3<S> A = mulT33(X.E, Mat3<S>(mul33(Mat3<S>(I.template topLeftCorner<3, 3>()), X.E)));
+  const Mat3<S> B = mulT33(X.E, Mat3<S>(mul33(Mat3<S>(I.template topRightCorner<3, 3>()), X.E)));
+  const Mat3<S> C = mulT33(X.E, Mat3<S>(mul33(Mat3<S>(I.template bottomRightCorner<3, 3>()), X.E)));
+  const Mat3<S> rxC = crossMat(X.r, C);                       // r^ C
   const Mat3<S> Bp = B + rxC;
-  const Mat3<S> Bprx = B * rx;
-  const Mat3<S> Ap = A - Bprx - Bprx.transpose() - rxC * rx;  // r^ B^T = -(B r^)^T
-  out.template topLeftCorner<3, 3>() += Ap;
+  // A_p = A - B r^ + r^ B^T - r^ C r^ = A + r^ B^T + (r^ B^T)^T + r^ (r^ C)^T   (C symmetric)
+  const Mat3<S> rxBt = crossMat(X.r, Mat3<S>(B.transpose()));
+  const Mat3<S> rxCrx = crossMat(X.r, Mat3<S>(rxC.transpose()));  // r^ C^T r^T = -r^ C r^
+  out.template topLeftCorner<3, 3>() += A + rxBt + rxBt.transpose() + rxCrx;
   out.template topRightCorner<3, 3>() += Bp;
   out.template bottomLeftCorner<3, 3>() += Bp.transpose();
   out.template bottomRightCorner<3, 3>() += C;
@@ -120,6 +180,19 @@ inline Mat6<S> rigidInertia(S m, const Vec3<S>& c, const Mat3<S>& Ic) {
   I.template bottomLeftCorner<3, 3>() = -m * cx;
   I.template bottomRightCorner<3, 3>() = m * Mat3<S>::Identity();
   return I;
+}
+
+// E = R(q)^T for a quaternion (w, x, y, z) of any non-zero norm (scaled by 2 / |q|^2, so a slightly
+// unnormalised state never shears the rotation and no sqrt is needed).
+template <class S>
+inline void quatToTransposedRotation(S w, S x, S y, S z, Mat3<S>& E) {
+  const S s = S(2) / (w * w + x * x + y * y + z * z);
+  const S xx = s * x * x, yy = s * y * y, zz = s * z * z;
+  const S xy = s * x * y, xz = s * x * z, yz = s * y * z;
+  const S wx = s * w * x, wy = s * w * y, wz = s * w * z;
+  E(0, 0) = S(1) - yy - zz; E(1, 0) = xy - wz;         E(2, 0) = xz + wy;
+  E(0, 1) = xy + wz;         E(1, 1) = S(1) - xx - zz; E(2, 1) = yz - wx;
+  E(0, 2) = xz - wy;         E(1, 2) = yz + wx;         E(2, 2) = S(1) - xx - yy;
 }
 
 // Quaternion exponential map: rotation by the rotation vector w (angle |w|), exact for all |w|.
