@@ -37,6 +37,7 @@
 #include "sparsebody/features/n3p_calibration.hpp"
 #include "sparsebody/pose/body_pose.hpp"
 #include "sparsebody/pose/ik.hpp"
+#include "sparsebody/pose/joint_map.hpp"
 #include "sparsebody/trackers/resampler.hpp"
 #include "sparsebody/trackers/sanitizer.hpp"
 
@@ -114,6 +115,7 @@ class N3PPipeline {
   explicit N3PPipeline(const Weights& w, N3PConfig cfg = {})
       : cfg_(cfg), pred_(w), sanitizer_(cfg.sanitizer), resampler_(pred_.meta().frame_rate) {
     const pose::Skeleton& s = pred_.skeleton();
+    map_ = pose::JointMap::from_names(s, w.lo->info().source);
     pose_.resize(s.size());
     last_pose_.resize(s.size());
     world_.resize(s.size());
@@ -198,6 +200,8 @@ class N3PPipeline {
   bool has_output() const noexcept { return valid_output_; }
   double user_scale() const noexcept { return 1.0 / calib_.base.scale; }
   const pose::Skeleton& skeleton() const noexcept { return pred_.skeleton(); }
+  const pose::JointMap& joint_map() const noexcept { return map_; }
+  const N3PMeta& meta() const noexcept { return pred_.meta(); }
   const Predictor& predictor() const noexcept { return pred_; }
   double contact_probability(int foot) const noexcept { return pred_.contact(foot); }
   bool contact(int foot) const noexcept { return contact_probability(foot) > cfg_.contact_threshold; }
@@ -271,6 +275,7 @@ class N3PPipeline {
   trackers::TrackerSanitizer sanitizer_;
   trackers::Resampler resampler_;
   features::n3p::N3PCalibration calib_;
+  pose::JointMap map_;
   pose::BodyPose pose_, last_pose_;
   pose::WorldPose world_, last_world_;
   FootPin lock_[2];
