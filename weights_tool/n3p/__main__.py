@@ -1,9 +1,12 @@
 """Command line: /usr/bin/python3 -m weights_tool.n3p {dataset,train,export,evaluate,golden} ...
 
 Reproduce the default weights (examples/weights/n3p_*.json), from the repository root:
-  python3 -m weights_tool.n3p dataset ../shared/data/bandai-namco/train.tar.xz-unpacked-dir /tmp/n3p/train.npz --every 2
-  python3 -m weights_tool.n3p dataset <validation dir> /tmp/n3p/val.npz
-  python3 -m weights_tool.n3p train --train /tmp/n3p/train.npz --val /tmp/n3p/val.npz --out /tmp/n3p/n3p.pt
+  mkdir -p /tmp/n3p/data && tar -xJf ../shared/data/bandai-namco/train.tar.xz -C /tmp/n3p/data
+  tar -xJf ../shared/data/bandai-namco/validation.tar.xz -C /tmp/n3p/data
+  python3 -m weights_tool.n3p dataset /tmp/n3p/data/train /tmp/n3p/train.npz --every 2
+  python3 -m weights_tool.n3p dataset /tmp/n3p/data/validation /tmp/n3p/val.npz
+  python3 -m weights_tool.n3p train --train /tmp/n3p/train.npz --val /tmp/n3p/val.npz --out /tmp/n3p/n3p.pt \
+      --minutes 6 12 12 20          # wall-clock budget per stage (sig, lo, up pretraining; fine-tuning)
   python3 -m weights_tool.n3p export /tmp/n3p/n3p.pt /tmp/n3p/train.npz examples/weights/n3p
   python3 -m weights_tool.n3p evaluate examples/weights/n3p /tmp/n3p/val.npz
   python3 -m weights_tool.n3p golden tests/n3p/golden --default examples/weights/n3p   # C++ parity goldens
@@ -19,6 +22,8 @@ def main(argv=None):
         print(__doc__)
         return 0
     cmd, rest = argv[0], argv[1:]
+    import torch
+    torch.set_num_threads(1)  # shared CPU: one thread (train sets its own with --threads)
     if cmd == "train":
         from . import train
         return train.main(rest)
