@@ -4,9 +4,10 @@ The standard skeleton is the one of the training data (Bandai Namco, 21 joints f
 skeletons (e.g. CMU) are mapped onto it by joint names (ROLE_NAMES) and scaled by leg length.
 
 Tracker frames (the convention shared with C++ features/calibration.hpp):
-  pelvis   position of the hips joint; orientation F_hips = the frame built from joint positions:
-           Y = up (hips -> first spine joint), X = left (left minus right thigh root, made
-           orthogonal), Z = X x Y = forward. On the standard skeleton it is rigid with the hips.
+  pelvis   position of the hips joint; orientation W_hips F_local, F_local = the frame built from
+           the rest offsets: Y = up (hips -> first spine joint away from the hips), X = left (left
+           minus right thigh root, made orthogonal), Z = X x Y = forward. Rigid with the hips joint,
+           so a bending lower back (CMU's LowerBack/Spine) does not tilt it.
   head, hands  joint position; orientation Q_k(t) o_k with o_k = Q_k(t0)^T Yaw(F_hips(t0)): at the
            calibration frame t0 every tracker points along the body's facing frame (paper §4.2: the
            rotational offsets are found in a calibration pose).
@@ -142,10 +143,8 @@ class Clip:
         """Synthetic tracker world poses: positions [F, 4, 3] and rotations [F, 4, 3, 3] in the order
         head, hand_l, hand_r, pelvis (features.TRACKER_ORDER)."""
         r = self.roles
-        # pelvis frame from joint positions (rigid with the hips when the thighs hang off the hips)
-        up = self.pw[:, spine_base(self.bvh, r)] - self.pw[:, r["hips"]]
-        left = self.pw[:, r["upleg_l"]] - self.pw[:, r["upleg_r"]]
-        Fh = np.stack([frame_from(u, l) for u, l in zip(up, left)])
+        # pelvis frame rigid with the hips joint (rest geometry): follows the pelvis, not the lower back
+        Fh = self.Rw[:, r["hips"]] @ self.F_local
         yaw0 = yaw_frame(Fh[t0, :, 2])
         P = np.empty((self.frames, 4, 3))
         Q = np.empty((self.frames, 4, 3, 3))

@@ -1,8 +1,8 @@
 // Synthetic trackers from mocap (training data, demos, tests): headset at the head joint,
 // controllers at the hand joints, pelvis tracker at the hips joint. Python twin:
 // weights_tool/lobstr/skeleton.py Clip.trackers (keep equal; the parity test checks it).
-//   pelvis orientation = F_hips(t): from joint positions, Y = up (hips -> spine_base), X = left
-//                        (left minus right thigh root), Z forward (pose/joint_map.hpp)
+//   pelvis orientation = W_hips(t) F_local, F_local = hips_tracker_frame (rest geometry: Y up to
+//                        spine_base, X left, Z forward), rigid with the hips joint (pose/joint_map.hpp)
 //   head/hand orientation = W_k(t) o_k,  o_k = W_k(t0)^T Yaw(F_hips(t0) at t0 = 0)
 // i.e. at the first frame every tracker's axes are the body's facing frame, which is what
 // calibration (features/calibration.hpp) makes of a user's trackers. Positions are in metres with
@@ -56,15 +56,14 @@ inline SyntheticTrackers synthesize_trackers(const io::BvhClip& clip, const pose
   pose::Vec3Vector tr(static_cast<std::size_t>(s.size()));
   pose::WorldPose w;
   w.resize(s.size());
-  const int spine = pose::spine_base(s, m);
+  const Eigen::Matrix3d F_local = pose::hips_tracker_frame(s, m);
   const int joints[3] = {m[Role::Head], m[Role::HandL], m[Role::HandR]};
   std::vector<double> toe_y;
   Eigen::Matrix3d o[3];
   out.frames.resize(static_cast<std::size_t>(clip.frames));
   for (int f = 0; f < clip.frames; ++f) {
     clip.world_pose(f, tmp, tr, w, units);
-    const Eigen::Matrix3d Fh = pose::left_up_frame(w.position[spine] - w.position[m[Role::Hips]],
-                                                   w.position[m[Role::UpLegL]] - w.position[m[Role::UpLegR]]);
+    const Eigen::Matrix3d Fh = w.rotation[m[Role::Hips]].toRotationMatrix() * F_local;
     if (f == 0) {
       const Eigen::Matrix3d yaw0 = yaw_frame(Fh.col(2), Eigen::Matrix3d::Identity());
       for (int k = 0; k < 3; ++k) o[k] = w.rotation[joints[k]].toRotationMatrix().transpose() * yaw0;
