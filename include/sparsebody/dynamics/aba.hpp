@@ -16,7 +16,7 @@ template <class S, int MB, int MD>
 inline void abaKinematics(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecQ& q,
                           const typename Model<S, MB, MD>::VecV& qd, bool with_world = false) {
   forwardKinematics(m, d, q, &qd, with_world);
-  for (int i = 0; i < m.nb; ++i) d.bias[i] = crossForce(d.v[i], Vec6<S>(m.bodies[i].I * d.v[i]));
+  for (int i = 0; i < m.nb; ++i) d.bias[i] = crossForce(d.v[i], mul6v(m.bodies[i].I, d.v[i]));
 }
 
 // Passes 2 and 3, after abaKinematics. h_damp = h for implicit damping, 0 for explicit.
@@ -68,7 +68,7 @@ inline bool abaSolve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typena
             Ia(r, c) = v;
             Ia(c, r) = v;
           }
-        pa = d.pA[i] + Ia * d.c[i] + UD * d.u[i];
+        pa = d.pA[i] + mul6v(Ia, d.c[i]) + UD * d.u[i];
         break;
       }
       case JointType::Revolute: {
@@ -80,14 +80,14 @@ inline bool abaSolve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typena
         d.u[i](0) = tau(b.v_index) - b.axis.dot(d.pA[i].template head<3>());
         if (b.parent < 0) continue;
         Ia = IA - (Ucol * d.Dinv[i](0, 0)) * Ucol.transpose();
-        pa = d.pA[i] + Ia * d.c[i] + Ucol * (d.Dinv[i](0, 0) * d.u[i](0));
+        pa = d.pA[i] + mul6v(Ia, d.c[i]) + Ucol * (d.Dinv[i](0, 0) * d.u[i](0));
         break;
       }
       case JointType::Fixed:
       default:
         if (b.parent < 0) continue;
         Ia = IA;
-        pa = d.pA[i] + IA * d.c[i];
+        pa = d.pA[i] + mul6v(IA, d.c[i]);
         break;
     }
     addTransformedInertia(d.X[i], Ia, d.IA[b.parent]);        // I^A_lambda += X^T I^a X

@@ -73,13 +73,22 @@ inline void forwardKinematics(const Model<S, MB, MD>& m, Data<S, MB, MD>& d,
       }
     }
     if (qd) {
-      const Vec6<S> vJ = jointVelocity(m, i, *qd);
+      const Body<S>& b = m.bodies[i];
       if (pi < 0) {
-        d.v[i] = vJ;
+        d.v[i] = jointVelocity(m, i, *qd);
         d.c[i].setZero();  // v x vJ = vJ x vJ = 0 at the root
       } else {
-        d.v[i] = d.X[i].apply(d.v[pi]) + vJ;
-        d.c[i] = crossMotion(d.v[i], vJ);  // S is constant in body coordinates, so c = v x S qd
+        // S is constant in body coordinates, so c = v x S qd. For spherical/revolute joints
+        // vJ = (w_J, 0), hence c = (w x w_J, v_lin x w_J).
+        d.v[i] = d.X[i].apply(d.v[pi]);
+        Vec3<S> wJ;
+        if (b.joint == JointType::Spherical) wJ = qd->template segment<3>(b.v_index);
+        else if (b.joint == JointType::Revolute) wJ = b.axis * (*qd)(b.v_index);
+        else { d.c[i].setZero(); continue; }
+        d.v[i].template head<3>() += wJ;
+        const Vec3<S> w = d.v[i].template head<3>(), vl = d.v[i].template tail<3>();
+        d.c[i].template head<3>() = w.cross(wJ);
+        d.c[i].template tail<3>() = vl.cross(wJ);
       }
     }
   }

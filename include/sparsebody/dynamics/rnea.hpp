@@ -30,7 +30,7 @@ inline void rnea(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename M
     // a_i = X_i a_lambda + S_i qdd_i + c_i
     d.a[i] = d.X[i].apply(pi < 0 ? a0 : d.a[pi]) + jointVelocity(m, i, qdd) + d.c[i];
     const Mat6<S>& I = m.bodies[i].I;
-    d.f[i] = I * d.a[i] + crossForce(d.v[i], Vec6<S>(I * d.v[i]));
+    d.f[i] = mul6v(I, d.a[i]) + crossForce(d.v[i], mul6v(I, d.v[i]));
     if (d.has_ext) d.f[i] -= d.fext[i];
   }
   tau.resize(m.nv);

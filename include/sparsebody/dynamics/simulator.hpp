@@ -112,7 +112,7 @@ class Simulator {
     q_prev_ = q_;
     v_prev_ = v_;
     // Kinematics of the current state are already in d_ (from the previous step or setState).
-    for (int i = 0; i < m_.nb; ++i) d_.bias[i] = crossForce(d_.v[i], Vec6<S>(m_.bodies[i].I * d_.v[i]));
+    for (int i = 0; i < m_.nb; ++i) d_.bias[i] = crossForce(d_.v[i], mul6v(m_.bodies[i].I, d_.v[i]));
     if (mode == ControlMode::PdTargets) pdTorques(m_, q_, v_, q_target_, v_target_, tau_);
     else passiveTorques(m_, v_, tau_);
     tau_ += tau_user_;

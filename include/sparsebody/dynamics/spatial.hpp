@@ -108,6 +108,15 @@ inline Mat3<S> mulT33(const Mat3<S>& A, const Mat3<S>& B) {  // A^T B
     for (int i = 0; i < 3; ++i) C(i, j) = A(0, i) * B(0, j) + A(1, i) * B(1, j) + A(2, i) * B(2, j);
   return C;
 }
+// 6x6 matrix times 6-vector, as plain loops (see mul33).
+template <class S>
+inline Vec6<S> mul6v(const Mat6<S>& A, const Vec6<S>& x) {
+  Vec6<S> y;
+  for (int i = 0; i < 6; ++i)
+    y(i) = A(i, 0) * x(0) + A(i, 1) * x(1) + A(i, 2) * x(2) + A(i, 3) * x(3) + A(i, 4) * x(4) + A(i, 5) * x(5);
+  return y;
+}
+
 // Inverse of a symmetric 3x3 matrix by cofactors (D_i of a spherical joint is SPD).
 template <class S>
 inline Mat3<S> inverseSym3(const Mat3<S>& D) {
