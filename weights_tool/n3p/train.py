@@ -12,7 +12,7 @@ Fine-tuning minimises L = L_sig + L_lo + L_up; in the rollout a quarter of the s
 CPU, one thread, a wall-clock budget per stage; checkpoints after every stage.
 """
 import argparse
-import json
+import sys
 import time
 
 import numpy as np
@@ -159,18 +159,25 @@ def main(argv=None):
     p.add_argument("--max-iters", type=int, default=10 ** 9)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--threads", type=int, default=1)
+    p.add_argument("--resume", default=None, help="checkpoint to continue from: pretraining is skipped, only "
+                   "fine-tuning runs (its --minutes budget)")
     a = p.parse_args(argv)
     torch.set_num_threads(a.threads)
     torch.manual_seed(a.seed)
     rng = np.random.default_rng(a.seed)
     tr, va = Data(a.train), Data(a.val)
-    nets = [Sub(n, h) for n, h in zip(("sig", "lo", "up"), a.hidden)]
-    set_normalization(nets, tr, rng)
-    info = {"command": "weights_tool.n3p train " + " ".join(argv or []), "T": a.T, "batch": a.batch, "lr": a.lr,
-            "train_clips": int(len(tr.lens)), "train_frames": int(tr.lens.sum()), "stages": {}}
+    cmd = "weights_tool.n3p train " + " ".join(argv if argv is not None else sys.argv[1:])
+    if a.resume:
+        nets, info = load(a.resume)
+        info.setdefault("resumed", []).append(cmd)
+    else:
+        nets = [Sub(n, h) for n, h in zip(("sig", "lo", "up"), a.hidden)]
+        set_normalization(nets, tr, rng)
+        info = {"command": cmd, "T": a.T, "batch": a.batch, "lr": a.lr,
+                "train_clips": int(len(tr.lens)), "train_frames": int(tr.lens.sum()), "stages": {}}
     print(f"train: {len(tr.lens)} clips {tr.lens.sum()} frames; val: {len(va.lens)} clips", flush=True)
     T = a.T
-    for si, sub in enumerate(nets):
+    for si, sub in enumerate(nets if not a.resume else []):
         opt = torch.optim.Adam(sub.parameters(), lr=a.lr)
         sub.train()
         t0, it = time.time(), 0
