@@ -34,13 +34,39 @@ def run_clip(nets, c, init, hmd_only=False, dtype=torch.float64):
     return P.numpy(), R.numpy(), out
 
 
-def metrics(nets, data, init, hmd_only=False, limit=None):
+def run_batch(nets, clips, init, hmd_only=False, dtype=torch.float64):
+    """run_clip over several clips at once (padded with each clip's last frame; rows are independent)."""
+    n = max(len(c["TP"]) for c in clips)
+    pad = lambda a: np.concatenate([a, np.repeat(a[-1:], n - len(a), 0)]) if len(a) < n else a
+    clip = {k: np.stack([pad(np.asarray(c[k])) for c in clips]) for k in ("TP", "TQ6")}
+    B = len(clips)
+    TP, TQ6 = torch.as_tensor(clip["TP"], dtype=dtype), torch.as_tensor(clip["TQ6"], dtype=dtype)
+    rep = lambda v: torch.tensor(v, dtype=dtype)[None].repeat(B, 1)
+    glo0, gup0, o0 = rep(init["g_lo"]), rep(init["g_up"]), rep(init["o"])
+    h0 = initial_heading(TP[:, 0], TQ6[:, 0], o0)
+    valid = None
+    if hmd_only:
+        valid = torch.ones(B, n, 3, dtype=torch.bool)
+        valid[..., 1:] = False
+    with torch.no_grad():
+        out, _, _ = rollout(nets, TP, TQ6, h0, glo0, gup0, o0, valid)
+        P, R = world_pose(out["h"], out["glo"], out["gup"])
+    return [(P[b, :len(c["TP"])].numpy(), R[b, :len(c["TP"])].numpy()) for b, c in enumerate(clips)]
+
+
+def metrics(nets, data, init, hmd_only=False, limit=None, batch=32):
     n = len(data.lens) if not limit else min(limit, len(data.lens))
     err, err_up, err_lo, rot, jit, skate = [], [], [], [], [], []
     toes = [L.NAMES.index("Toes_L"), L.NAMES.index("Toes_R")]
+    order = sorted(range(n), key=lambda i: data.lens[i])
+    results = {}
+    for s in range(0, n, batch):
+        idx = order[s:s + batch]
+        for i, r in zip(idx, run_batch(nets, [data.clip(i) for i in idx], init, hmd_only)):
+            results[i] = r
     for i in range(n):
         c = data.clip(i)
-        P, R, _ = run_clip(nets, c, init, hmd_only)
+        P, R = results[i]
         G = c["P"].astype(np.float64)
         Rg = from6d(c["Q6"].astype(np.float64))
         e = np.linalg.norm(P - G, axis=-1)  # [F, 21]
