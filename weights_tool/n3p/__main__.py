@@ -52,7 +52,12 @@ def main(argv=None):
         p.add_argument("val_npz")
         p.add_argument("--limit", type=int, default=None)
         p.add_argument("--json", default=None, help="also write the figures here")
+        p.add_argument("--dump-direct", default=None, metavar="PATH",
+                       help="write the clips' trackers and ground truth for the C++ direct-mode evaluation and stop")
         a = p.parse_args(rest)
+        if a.dump_direct:
+            evaluate.dump_for_direct_mode(Data(a.val_npz), a.dump_direct, a.limit)
+            return 0
         nets, init = weights.load(a.prefix)
         r = evaluate.report(nets, Data(a.val_npz), init, a.limit)
         if a.json:

@@ -94,3 +94,20 @@ def report(nets, data, init, limit=None):
               f"lower {m['mpjpe_lower_cm']:.2f}), MPJRE {m['mpjre_deg']:.2f} deg, jitter {m['jitter_km_s3']:.2f} km/s^3, "
               f"foot skating {m['foot_skating_cm_s']:.2f} cm/s", flush=True)
     return out
+
+
+def dump_for_direct_mode(data, path, limit=None):
+    """Tracker input and ground truth of the clips as JSON for the C++ direct-mode evaluation
+    (tests/n3p/eval_direct.cpp): per clip trackers p [F, 9], q6 [F, 18], joints [F, 63], contacts [F, 2].
+    Stays outside the repository (it is made of the data)."""
+    import json
+    n = len(data.lens) if not limit else min(limit, len(data.lens))
+    clips = []
+    for i in range(n):
+        c = data.clip(i)
+        F = len(c["TP"])
+        clips.append({"p": np.round(c["TP"].reshape(F, 9), 6).tolist(), "q6": np.round(c["TQ6"].reshape(F, 18), 6).tolist(),
+                      "joints": np.round(c["P"].reshape(F, 63), 6).tolist(), "contacts": c["CT"].astype(int).tolist()})
+    with open(path, "w") as f:
+        json.dump({"upper": L.I_UP, "lower": L.I_LO, "toes": [L.NAMES.index("Toes_L"), L.NAMES.index("Toes_R")],
+                   "clips": clips}, f)

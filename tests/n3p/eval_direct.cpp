@@ -1,0 +1,81 @@
+// Direct-mode evaluation (not a test): runs N3PPipeline (predictor + foot pinning + arm IK) over
+// clips written by `python3 -m weights_tool.n3p evaluate WEIGHTS VAL.npz --dump-direct FILE.json` and
+// prints MPJPE full / upper / lower (cm), and foot skating (cm/s, toes, ground-truth contact
+// frames), for 3-point and HMD-only input. The input file is made of the data: keep it outside the
+// repository.
+//   eval_direct FILE.json [WEIGHTS_PREFIX]
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "sparsebody/avatar/n3p_direct.hpp"
+
+using namespace sparsebody;
+using Pipeline = avatar::N3PPipeline<float, 64, 128, 128>;
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: eval_direct FILE.json [WEIGHTS_PREFIX]\n");
+    return 2;
+  }
+  const std::string prefix = argc > 2 ? argv[2] : std::string(SPARSEBODY_SOURCE_DIR) + "/examples/weights/n3p";
+  std::ifstream in(argv[1]);
+  const auto d = nlohmann::json::parse(in);
+  const auto w = Pipeline::load(prefix);
+  const std::vector<int> upper = d["upper"], lower = d["lower"], toes = d["toes"];
+  for (int hmd = 0; hmd < 2; ++hmd) {
+    avatar::N3PConfig cfg;
+    cfg.use_controllers = hmd == 0;
+    double e = 0, eu = 0, el = 0, skate = 0;
+    long n = 0, ns = 0;
+    for (const auto& c : d["clips"]) {
+      Pipeline p(w, cfg);
+      const int F = static_cast<int>(c["p"].size());
+      Eigen::Vector3d prev[2];
+      for (int t = 0; t < F; ++t) {
+        trackers::TrackerFrame f;
+        f.time = t / 30.0;
+        for (int k = 0; k < 3; ++k) {
+          const auto& p3 = c["p"][t];
+          const auto& q = c["q6"][t];
+          Eigen::Matrix3d R;
+          R.col(2) = Eigen::Vector3d(q[6 * k], q[6 * k + 1], q[6 * k + 2]).normalized();
+          R.col(0) = Eigen::Vector3d(q[6 * k + 3], q[6 * k + 4], q[6 * k + 5]).cross(R.col(2)).normalized();
+          R.col(1) = R.col(2).cross(R.col(0));
+          f.pose[k].position = trackers::to_xr(Eigen::Vector3d(p3[3 * k], p3[3 * k + 1], p3[3 * k + 2]));
+          f.pose[k].orientation = trackers::to_xr(Eigen::Quaterniond(R));
+          f.valid[k] = true;
+        }
+        p.push(f);
+        if (!p.has_output()) continue;
+        const auto& J = c["joints"][t];
+        auto err = [&](int j) {
+          return (p.world().position[j] - Eigen::Vector3d(J[3 * j], J[3 * j + 1], J[3 * j + 2])).norm();
+        };
+        double a = 0, u = 0, l = 0;
+        for (int j = 0; j < p.skeleton().size(); ++j) a += err(j);
+        for (int j : upper) u += err(j);
+        for (int j : lower) l += err(j);
+        e += a / p.skeleton().size();
+        eu += u / upper.size();
+        el += l / lower.size();
+        ++n;
+        for (int s = 0; s < 2; ++s) {
+          const Eigen::Vector3d x = p.world().position[toes[s]];
+          if (t > 0 && c["contacts"][t][s].get<int>() != 0) {
+            skate += std::hypot(x.x() - prev[s].x(), x.z() - prev[s].z()) * 30.0;
+            ++ns;
+          }
+          prev[s] = x;
+        }
+      }
+    }
+    std::printf("direct mode %-8s (%zu clips): MPJPE %.2f cm (upper %.2f, lower %.2f), foot skating %.2f cm/s\n",
+                hmd ? "HMD-only" : "3-point", d["clips"].size(), 100 * e / n, 100 * eu / n, 100 * el / n,
+                100 * skate / std::max(1L, ns));
+  }
+  return 0;
+}
