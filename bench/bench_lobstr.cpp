@@ -4,6 +4,7 @@
 // golden, 30 Hz, one model step per pushed frame.
 // Targets on the 2-core dev machine: compact streaming <= 15 us, paper streaming <= 450 us.
 // Run: build/bench/bench_lobstr --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include <array>
 #include <fstream>
 
 #include <benchmark/benchmark.h>
@@ -73,6 +74,34 @@ void BM_Pipeline(benchmark::State& st) {
   st.SetLabel(std::string(H == 256 ? "compact H=256" : "paper H=1024") + (window ? ", window 30" : ", streaming"));
 }
 
+// The network step alone (same weights, the pipeline's features as input): the pipeline's own cost
+// is the difference, measured in the same run.
+template <int H>
+void BM_NetworkOnly(benchmark::State& st) {
+  avatar::LoBSTrPipeline<float, H, 128> p(weights<H>());
+  nn::Network<typename avatar::LoBSTrPipeline<float, H, 128>::Net> net(weights<H>());
+  const auto frames = clip_frames();
+  std::vector<std::array<float, 37>> xs;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    auto f = frames[i];
+    f.time = i / 30.0;
+    p.push(f);
+    std::array<float, 37> x;
+    std::copy(p.features(), p.features() + 37, x.begin());
+    xs.push_back(x);
+  }
+  std::size_t i = 0;
+  for (auto _ : st) {
+    const float* y = net.step(xs[i].data());
+    i = (i + 1) % xs.size();
+    benchmark::DoNotOptimize(y);
+    benchmark::ClobberMemory();
+  }
+  st.SetLabel(H == 256 ? "network step only, H=256" : "network step only, H=1024");
+}
+
+BENCHMARK_TEMPLATE(BM_NetworkOnly, 256)->Name("lobstr/compact/network_only")->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_NetworkOnly, 1024)->Name("lobstr/paper/network_only")->Unit(benchmark::kMicrosecond);
 BENCHMARK_TEMPLATE(BM_Pipeline, 256)->Name("lobstr/compact/streaming")->Arg(0)->Unit(benchmark::kMicrosecond);
 BENCHMARK_TEMPLATE(BM_Pipeline, 256)->Name("lobstr/compact/window")->Arg(1)->Unit(benchmark::kMicrosecond);
 BENCHMARK_TEMPLATE(BM_Pipeline, 1024)->Name("lobstr/paper/streaming")->Arg(0)->Unit(benchmark::kMicrosecond);
