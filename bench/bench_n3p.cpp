@@ -3,6 +3,7 @@
 //   BM_N3PPredictorStep     one Eq. (2) step: 3 tracker transforms, 3 networks, heading update, pose
 //   BM_N3PPredictorHmdOnly  the same with both controllers from o* (§8.2)
 //   BM_N3PPredictorStepF16  one step with the weights stored as float16 (half the bytes to read)
+//   BM_N3PNet/{0,1,2}       G_sig, G_lo, G_up alone (one network step each)
 //   BM_N3PPipelineFrame     a whole 30 Hz frame of the direct-mode pipeline (resampling, checks,
 //                           calibration, predictor, foot pinning and arm IK)
 // Input: a synthetic user walking a circle and waving (no data files needed besides the weights).
@@ -83,6 +84,26 @@ void BM_N3PPredictorStepF16(benchmark::State& s) {
   predictor<avatar::N3PPipeline<float, 64, 128, 128, nn::f16>>(s, false);
 }
 
+template <class Net, class WPtr>
+void net_step(benchmark::State& state, const WPtr& w) {
+  nn::Network<Net> n(w);
+  std::vector<float> x(Net::in_size, 0.1f);
+  for (auto _ : state) benchmark::DoNotOptimize(n.step(x.data()));
+}
+void BM_N3PNet(benchmark::State& state) {
+  const auto* w = weights<Pipeline>();
+  if (!w) {
+    state.SkipWithError("default weights not found");
+    return;
+  }
+  using P = Pipeline::Predictor;
+  if (state.range(0) == 0) net_step<typename P::SigNet>(state, w->sig);
+  if (state.range(0) == 1) net_step<typename P::LoNet>(state, w->lo);
+  if (state.range(0) == 2) net_step<typename P::UpNet>(state, w->up);
+  state.SetBytesProcessed(state.iterations() *
+                          static_cast<int64_t>(state.range(0) == 0 ? w->sig->bytes() : state.range(0) == 1 ? w->lo->bytes() : w->up->bytes()));
+}
+
 void BM_N3PPipelineFrame(benchmark::State& state) {
   const auto* w = weights<Pipeline>();
   if (!w) {
@@ -102,5 +123,6 @@ void BM_N3PPipelineFrame(benchmark::State& state) {
 BENCHMARK(BM_N3PPredictorStep);
 BENCHMARK(BM_N3PPredictorHmdOnly);
 BENCHMARK(BM_N3PPredictorStepF16);
+BENCHMARK(BM_N3PNet)->Arg(0)->Arg(1)->Arg(2);
 BENCHMARK(BM_N3PPipelineFrame);
 BENCHMARK_MAIN();
