@@ -226,13 +226,12 @@ class LoBSTrPipeline {
   // outwards, and two-bone IK from the shoulders to the hand trackers with elbows down and back.
   void solve_upper_body() noexcept {
     const pose::Skeleton& s = meta_.skeleton;
-    pose::forward_kinematics(s, pose_, world_);  // hips and legs placed
     const Eigen::Matrix3d H = cal_[0].orientation.toRotationMatrix();
     const Eigen::Matrix3d Wh = pose_.local[0].toRotationMatrix();
     const Eigen::Vector3d left_body = cal_[3].orientation.toRotationMatrix().col(0);
     const Eigen::Vector3d up_body = cal_[3].orientation.toRotationMatrix().col(1);
     const int base = spine_rev_[spine_n_ - 1];
-    const Eigen::Vector3d base_pos = world_.position[0] + Wh * s.offsets[base];
+    const Eigen::Vector3d base_pos = pose_.root_position + Wh * s.offsets[base];
     Eigen::Vector3d dir = cal_[0].position - base_pos;
     if (dir.norm() < 1e-6) dir = up_body;
     dir.normalize();
@@ -251,15 +250,17 @@ class LoBSTrPipeline {
     }
     pose::forward_kinematics(s, pose_, world_);
     const Eigen::Vector3d fwd_body = cal_[3].orientation.toRotationMatrix().col(2);
+    for (int side = 0; side < 2; ++side) {  // clavicles outwards (independent of each other)
+      const int clav = arm_[side][3];
+      if (clav == chest_) continue;
+      const double sgn = side == 0 ? 1.0 : -1.0;
+      const Eigen::Quaterniond w = pose::aim(bone_local(clav), Eigen::Vector3d::UnitY(), sgn * left_body, fwd_body);
+      pose_.local[clav] = (world_.rotation[s.parents[clav]].conjugate() * w).normalized();
+    }
+    pose::forward_kinematics(s, pose_, world_);
     for (int side = 0; side < 2; ++side) {
       const int clav = arm_[side][3], up = arm_[side][0], lo = arm_[side][1], hand = arm_[side][2];
       const double sgn = side == 0 ? 1.0 : -1.0;
-      const Eigen::Quaterniond Wc_par = world_.rotation[s.parents[clav]];
-      if (clav != chest_) {
-        const Eigen::Quaterniond w = pose::aim(bone_local(clav), Eigen::Vector3d::UnitY(), sgn * left_body, fwd_body);
-        pose_.local[clav] = (Wc_par.conjugate() * w).normalized();
-      }
-      pose::forward_kinematics(s, pose_, world_);
       const Eigen::Vector3d a = world_.position[up], b = world_.position[lo], c = world_.position[hand];
       const Eigen::Vector3d pole = -up_body - 0.5 * fwd_body + 0.2 * sgn * left_body;
       Eigen::Vector3d b2, c2;
