@@ -1,0 +1,70 @@
+// Contact post-processing (paper §3.4.1) and the IK pieces it uses.
+#include <doctest/doctest.h>
+
+#include "sparsebody/pose/contact.hpp"
+#include "sparsebody/pose/ik.hpp"
+
+using namespace sparsebody;
+using Eigen::Vector3d;
+
+TEST_CASE("foot lock: lock at contact, hold, 10-frame slow-in-slow-out release") {
+  pose::FootLock lock(10);
+  const Vector3d hip(0, 0.9, 0);
+  Vector3d target;
+  CHECK_FALSE(lock.update(false, Vector3d(0.1, 0.1, 0.2), hip, 1.0, 0.1, 0.042, target));
+  REQUIRE(lock.update(true, Vector3d(0.1, 0.06, 0.2), hip, 1.0, 0.1, 0.042, target));
+  CHECK(target.isApprox(Vector3d(0.1, 0.042, 0.2)));  // at the standing toe height
+  REQUIRE(lock.update(true, Vector3d(0.15, 0.05, 0.22), hip, 1.0, 0.1, 0.042, target));  // network toe drifts 5 cm
+  CHECK(target.isApprox(Vector3d(0.1, 0.042, 0.2)));  // held
+  // release: the target goes from the lock to the network's toe with w_k = (1 - cos(pi k / 10)) / 2
+  const Vector3d toe(0.3, 0.1, 0.2);
+  double prev = -1;
+  for (int k = 1; k <= 10; ++k) {
+    REQUIRE(lock.update(false, toe, hip, 1.0, 0.1, 0.042, target));
+    const double w = (target.x() - 0.1) / (0.3 - 0.1);
+    CHECK(w == doctest::Approx(0.5 - 0.5 * std::cos(M_PI * k / 10)));
+    CHECK(w > prev);
+    prev = w;
+  }
+  CHECK(target.isApprox(toe));
+  CHECK_FALSE(lock.update(false, toe, hip, 1.0, 0.1, 0.042, target));  // free again
+}
+
+TEST_CASE("foot lock: released when the network's toe leaves it or the leg cannot reach; no re-lock until contact goes off") {
+  pose::FootLock lock(10);
+  Vector3d target;
+  const Vector3d hip(0, 0.9, 0);
+  lock.update(true, Vector3d(0, 0.05, 0), hip, 1.0, 0.1, 0.042, target);
+  CHECK(lock.state() == pose::FootLock::State::Locked);
+  lock.update(true, Vector3d(0.2, 0.05, 0), hip, 1.0, 0.1, 0.042, target);  // 20 cm away: drift
+  CHECK(lock.state() == pose::FootLock::State::Blending);
+  for (int k = 0; k < 12; ++k) lock.update(true, Vector3d(0.2, 0.05, 0), hip, 1.0, 0.1, 0.042, target);
+  CHECK(lock.state() == pose::FootLock::State::Free);  // contact still on, but held off
+  lock.update(false, Vector3d(0.2, 0.05, 0), hip, 1.0, 0.1, 0.042, target);
+  lock.update(true, Vector3d(0.2, 0.05, 0), hip, 1.0, 0.1, 0.042, target);
+  CHECK(lock.state() == pose::FootLock::State::Locked);
+  lock.update(true, Vector3d(0.2, 0.05, 0), Vector3d(1.5, 0.9, 0), 1.0, 0.1, 0.042, target);  // hip walked away
+  CHECK(lock.state() == pose::FootLock::State::Blending);
+}
+
+TEST_CASE("two-bone IK keeps bone lengths, reaches reachable targets, bends towards the pole") {
+  const Vector3d a(0, 1, 0), b(0, 0.55, 0.02), c(0, 0.1, 0);
+  const double l1 = (b - a).norm(), l2 = (c - b).norm();
+  Vector3d b2, c2;
+  pose::two_bone(a, b, c, Vector3d(0.1, 0.3, 0.2), Vector3d(0, 0, 1), b2, c2);
+  CHECK((b2 - a).norm() == doctest::Approx(l1));
+  CHECK((c2 - b2).norm() == doctest::Approx(l2));
+  CHECK((c2 - Vector3d(0.1, 0.3, 0.2)).norm() < 1e-9);
+  CHECK(b2.z() > 0.2);  // knee forward, towards the pole
+  pose::two_bone(a, b, c, Vector3d(0, -2, 0), Vector3d(0, 0, 1), b2, c2);  // out of reach: straight
+  CHECK((c2 - a).norm() == doctest::Approx(l1 + l2).epsilon(1e-5));
+  CHECK(c2.x() == doctest::Approx(0).epsilon(1e-9));
+}
+
+TEST_CASE("aim maps the primary axis exactly and the secondary as close as possible") {
+  const Eigen::Quaterniond q = pose::aim(Vector3d::UnitX(), Vector3d::UnitY(), Vector3d(0, 1, 0), Vector3d(0, 0, 1));
+  CHECK((q * Vector3d::UnitX() - Vector3d(0, 1, 0)).norm() < 1e-12);
+  CHECK((q * Vector3d::UnitY() - Vector3d(0, 0, 1)).norm() < 1e-12);
+  const Eigen::Quaterniond r = pose::aim(Vector3d::UnitX(), Vector3d::UnitY(), Vector3d(1, 0, 0), Vector3d(1, 0, 0));  // degenerate
+  CHECK(r.coeffs().allFinite());
+}
