@@ -41,6 +41,10 @@ using Glo = networks::N3PPredictorNet<float, 12, 128, 113>;
 using Gup = networks::N3PPredictorNet<float, 45, 128, 201>;
 using N3PPolicy = networks::N3PPolicyNet<float, 868, 72>;
 using QuestSim = networks::QuestSimPolicyNet<float, 475, 33>;
+using N3PPolicyF16 = networks::N3PPolicyNet<float, 868, 72, 256, nn::f16>;
+using QuestSimF16 = networks::QuestSimPolicyNet<float, 475, 33, nn::f16>;
+template <int H>
+using LoBSTrF16Small = networks::LoBSTrNet<float, H, kLatent, 37, nn::f16>;
 
 io::TensorTable lobstr_table(int H, int latent, bool gru_only = false) {
   return sparsebody_test::random_lobstr_table(H, latent, 1, gru_only);
@@ -168,6 +172,9 @@ void register_all() {
   SB_NET("N3P_Gup_H128", Gup, n3p_table(45, 128, 201), "n3p_upper")
   SB_NET("N3P_policy_868_256_256_72", N3PPolicy, mlp_table({868, 256, 256, 72}), "n3p_policy")
   SB_NET("QuestSim_475_400_300_200_33", QuestSim, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
+  SB_NET("LoBSTr_H256_f16weights", LoBSTrF16Small<256>, lobstr_table(256, kLatent), "lobstr")
+  SB_NET("N3P_policy_868_256_256_72_f16weights", N3PPolicyF16, mlp_table({868, 256, 256, 72}), "n3p_policy")
+  SB_NET("QuestSim_475_400_300_200_33_f16weights", QuestSimF16, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
 #undef SB_NET
   add_ratio("GRU_37x1024 f16 weights / plain read of its float weights", "sparsebody/GRU_37x1024_f16weights",
             "read/" + std::to_string(entries[0].weight_bytes) + "B/" + std::to_string(entries[0].weight_bytes));
@@ -192,6 +199,9 @@ void register_all() {
   reg("libtorch/N3P_Gup_H128", [](benchmark::State& s) { bench_torch(s, torch_n3p_predictor(45, 128, 201)); });
   reg("libtorch/N3P_policy_868_256_256_72", [](benchmark::State& s) { bench_torch(s, torch_mlp({868, 256, 256, 72}, false)); });
   reg("libtorch/QuestSim_475_400_300_200_33", [](benchmark::State& s) { bench_torch(s, torch_mlp({475, 400, 300, 200, 33}, true)); });
+  for (const char* n : {"LoBSTr_H256", "N3P_policy_868_256_256_72", "QuestSim_475_400_300_200_33"})
+    add_ratio(std::string(n) + " f16 weights sparsebody / LibTorch float", std::string("sparsebody/") + n + "_f16weights",
+              std::string("libtorch/") + n);
   for (const char* n : {"LoBSTr_H1024", "LoBSTr_H256", "N3P_Gsig_H64", "N3P_Glo_H128", "N3P_Gup_H128",
                         "N3P_policy_868_256_256_72", "QuestSim_475_400_300_200_33"})
     add_ratio(std::string(n) + " sparsebody / LibTorch", std::string("sparsebody/") + n, std::string("libtorch/") + n);

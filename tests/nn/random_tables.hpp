@@ -55,7 +55,9 @@ inline sparsebody::io::TensorTable random_lobstr_table(int H, int L, unsigned se
 template <class Net>
 std::shared_ptr<const sparsebody::nn::NetworkWeights<Net>> weights_from_table(sparsebody::io::TensorTable t,
                                                                               const char* kind) {
-  sparsebody::io::WeightsDocument doc{sparsebody::io::ModelInfo{t.source()}, std::move(t)};
+  sparsebody::io::WeightsDocument doc;
+  doc.info.source = t.source();
+  doc.tensors = std::move(t);
   doc.info.kind = kind;
   doc.info.input_size = Net::in_size;
   doc.info.output_size = Net::out_size;

@@ -15,11 +15,12 @@ namespace policy_names {
 inline constexpr char kLayers[] = "layers";
 }
 
-template <typename T, int In, int Out, int Hidden = 256>
-using N3PPolicyNet = nn::Named<policy_names::kLayers, nn::MLP<T, nn::ReLU, nn::Identity, In, Hidden, Hidden, Out>>;
+// W: stored weight type (T, or nn::f16 to halve the bytes per step).
+template <typename T, int In, int Out, int Hidden = 256, typename W = T>
+using N3PPolicyNet = nn::Named<policy_names::kLayers, nn::MLPStored<T, W, nn::ReLU, nn::Identity, In, Hidden, Hidden, Out>>;
 
-template <typename T, int In, int Out>
-using QuestSimPolicyNet = nn::Named<policy_names::kLayers, nn::MLP<T, nn::Tanh, nn::Tanh, In, 400, 300, 200, Out>>;
+template <typename T, int In, int Out, typename W = T>
+using QuestSimPolicyNet = nn::Named<policy_names::kLayers, nn::MLPStored<T, W, nn::Tanh, nn::Tanh, In, 400, 300, 200, Out>>;
 
 inline constexpr const char* kN3PPolicyKind = "n3p_policy";
 inline constexpr const char* kQuestSimPolicyKind = "questsim_policy";

@@ -1,6 +1,7 @@
 // MLP<T, HiddenAct, OutAct, S0, S1, ..., Sk>: Dense layers S0->S1->...->Sk, HiddenAct after every
 // layer but the last, OutAct after the last. Its tensors are named like the children of an
 // nn.Sequential / nn.ModuleList of nn.Linear: "<i>.weight", "<i>.bias".
+// MLPStored<T, W, ...> is the same with weights stored as W (T, or f16 to halve the bytes per step).
 #pragma once
 #include <tuple>
 #include <utility>
@@ -11,18 +12,22 @@
 namespace sparsebody::nn {
 
 namespace detail {
-template <typename T, typename HiddenAct, typename OutAct, typename Sizes, typename Idx>
+template <typename T, typename W, typename HiddenAct, typename OutAct, typename Sizes, typename Idx>
 struct MlpBuilder;
-template <typename T, typename HiddenAct, typename OutAct, int... S, std::size_t... I>
-struct MlpBuilder<T, HiddenAct, OutAct, std::integer_sequence<int, S...>, std::index_sequence<I...>> {
+template <typename T, typename W, typename HiddenAct, typename OutAct, int... S, std::size_t... I>
+struct MlpBuilder<T, W, HiddenAct, OutAct, std::integer_sequence<int, S...>, std::index_sequence<I...>> {
   static constexpr int sizes[] = {S...};
   static constexpr std::size_t n = sizeof...(I);
-  using type = Sequential<Dense<T, sizes[I], sizes[I + 1], std::conditional_t<I + 1 == n, OutAct, HiddenAct>>...>;
+  using type =
+      Sequential<Dense<T, sizes[I], sizes[I + 1], std::conditional_t<I + 1 == n, OutAct, HiddenAct>, true, W>...>;
 };
 }  // namespace detail
 
+template <typename T, typename W, typename HiddenAct, typename OutAct, int... Sizes>
+using MLPStored = typename detail::MlpBuilder<T, W, HiddenAct, OutAct, std::integer_sequence<int, Sizes...>,
+                                              std::make_index_sequence<sizeof...(Sizes) - 1>>::type;
+
 template <typename T, typename HiddenAct, typename OutAct, int... Sizes>
-using MLP = typename detail::MlpBuilder<T, HiddenAct, OutAct, std::integer_sequence<int, Sizes...>,
-                                        std::make_index_sequence<sizeof...(Sizes) - 1>>::type;
+using MLP = MLPStored<T, T, HiddenAct, OutAct, Sizes...>;
 
 }  // namespace sparsebody::nn
