@@ -37,57 +37,75 @@ inline bool abaSolve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typena
   for (int i = m.nb - 1; i >= 0; --i) {
     const Body<S>& b = m.bodies[i];
     const S kdamp = h_damp * ((include_kd ? b.kd : S(0)) + b.damping);
-    Mat6<S>& IA = d.IA[i];
+    const Mat6<S>& IA = d.IA[i];
+    const Vec6<S>& pA = d.pA[i];
     Mat6<S> Ia;   // I^a_i, articulated inertia passed to the parent
     Vec6<S> pa;   // p^a_i
     switch (b.joint) {
       case JointType::Free: {  // root only (validated): solved in pass 3
-        d.root_llt.compute(IA);
-        if (d.root_llt.info() != Eigen::Success) ok = false;
+        if (!choleskyFactor6(IA, d.root_L)) ok = false;
         d.u[i].setZero();
         continue;
       }
       case JointType::Spherical: {
-        // S = [I3; 0]: U = I^A S is the first three columns, D the top-left 3x3 block.
-        d.U[i] = IA.template leftCols<3>();
-        Mat3<S> D = IA.template topLeftCorner<3, 3>();
-        D.diagonal().array() += kdamp;
-        d.Dinv[i] = inverseSym3(D);
-        if (!(D(0, 0) > S(0)) || !d.Dinv[i].allFinite()) ok = false;
-        d.u[i] = tau.template segment<3>(b.v_index) - d.pA[i].template head<3>();
+        // S = [I3; 0]: U = I^A S is the first three columns of I^A (read in place, also in pass 3:
+        // I^A_i is final once body i is reached), D the top-left 3x3 block.
+        Mat3<S> D;
+        SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c)
+          SPARSEBODY_UNROLL for (int r = 0; r < 3; ++r) D(r, c) = IA(r, c);
+        D(0, 0) += kdamp; D(1, 1) += kdamp; D(2, 2) += kdamp;
+        const Mat3<S> Dinv = inverseSym3(D);
+        d.Dinv[i] = Dinv;
+        if (!(D(0, 0) > S(0)) || !Dinv.allFinite()) ok = false;
+        const int k = b.v_index;
+        const S u0 = tau(k) - pA(0), u1 = tau(k + 1) - pA(1), u2 = tau(k + 2) - pA(2);
+        d.u[i] = Vec3<S>(u0, u1, u2);
         if (b.parent < 0) continue;
-        // I^a = I^A - U D^-1 U^T, symmetric: lower triangle by loops, then mirrored.
-        const Mat63<S>& U = d.U[i];
-        Mat63<S> UD;
-        for (int c = 0; c < 3; ++c)
-          for (int r = 0; r < 6; ++r)
-            UD(r, c) = U(r, 0) * d.Dinv[i](0, c) + U(r, 1) * d.Dinv[i](1, c) + U(r, 2) * d.Dinv[i](2, c);
-        for (int c = 0; c < 6; ++c)
-          for (int r = c; r < 6; ++r) {
-            const S v = IA(r, c) - (UD(r, 0) * U(c, 0) + UD(r, 1) * U(c, 1) + UD(r, 2) * U(c, 2));
+        // I^a = I^A - U D^-1 U^T, symmetric: lower triangle, mirrored; p^a = p^A + I^a c + U D^-1 u.
+        S UD[6][3];
+        SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r)
+          SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c)
+            UD[r][c] = IA(r, 0) * Dinv(0, c) + IA(r, 1) * Dinv(1, c) + IA(r, 2) * Dinv(2, c);
+        SPARSEBODY_UNROLL for (int c = 0; c < 6; ++c)
+          SPARSEBODY_UNROLL for (int r = c; r < 6; ++r) {
+            const S v = IA(r, c) - (UD[r][0] * IA(c, 0) + UD[r][1] * IA(c, 1) + UD[r][2] * IA(c, 2));
             Ia(r, c) = v;
             Ia(c, r) = v;
           }
-        pa = d.pA[i] + mul6v(Ia, d.c[i]) + UD * d.u[i];
+        const Vec6<S> Iac = mul6v(Ia, d.c[i]);
+        SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r)
+          pa(r) = pA(r) + Iac(r) + (UD[r][0] * u0 + UD[r][1] * u1 + UD[r][2] * u2);
         break;
       }
       case JointType::Revolute: {
-        const Vec6<S> Ucol = IA.template leftCols<3>() * b.axis;
-        const S D = b.axis.dot(Ucol.template head<3>()) + kdamp;
+        const S ax = b.axis.x(), ay = b.axis.y(), az = b.axis.z();
+        S Uc[6];
+        for (int r = 0; r < 6; ++r) Uc[r] = IA(r, 0) * ax + IA(r, 1) * ay + IA(r, 2) * az;
+        const S D = ax * Uc[0] + ay * Uc[1] + az * Uc[2] + kdamp;
         if (!(D > S(0))) ok = false;
-        d.U[i].col(0) = Ucol;
-        d.Dinv[i](0, 0) = S(1) / D;
-        d.u[i](0) = tau(b.v_index) - b.axis.dot(d.pA[i].template head<3>());
+        const S Dinv = S(1) / D;
+        for (int r = 0; r < 6; ++r) d.U[i](r, 0) = Uc[r];
+        d.Dinv[i](0, 0) = Dinv;
+        const S u = tau(b.v_index) - (ax * pA(0) + ay * pA(1) + az * pA(2));
+        d.u[i](0) = u;
         if (b.parent < 0) continue;
-        Ia = IA - (Ucol * d.Dinv[i](0, 0)) * Ucol.transpose();
-        pa = d.pA[i] + mul6v(Ia, d.c[i]) + Ucol * (d.Dinv[i](0, 0) * d.u[i](0));
+        S UD[6];
+        for (int r = 0; r < 6; ++r) UD[r] = Uc[r] * Dinv;
+        SPARSEBODY_UNROLL for (int c = 0; c < 6; ++c)
+          SPARSEBODY_UNROLL for (int r = c; r < 6; ++r) {
+            const S v = IA(r, c) - UD[r] * Uc[c];
+            Ia(r, c) = v;
+            Ia(c, r) = v;
+          }
+        const Vec6<S> Iac = mul6v(Ia, d.c[i]);
+        for (int r = 0; r < 6; ++r) pa(r) = pA(r) + Iac(r) + UD[r] * u;
         break;
       }
       case JointType::Fixed:
       default:
         if (b.parent < 0) continue;
         Ia = IA;
-        pa = d.pA[i] + mul6v(IA, d.c[i]);
+        pa = pA + mul6v(IA, d.c[i]);
         break;
     }
     addTransformedInertia(d.X[i], Ia, d.IA[b.parent]);        // I^A_lambda += X^T I^a X
@@ -98,27 +116,42 @@ inline bool abaSolve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typena
   qdd.resize(m.nv);
   for (int i = 0; i < m.nb; ++i) {
     const Body<S>& b = m.bodies[i];
-    const Vec6<S> ap = d.X[i].apply(b.parent < 0 ? a0 : d.a[b.parent]) + d.c[i];  // a'_i
+    Vec6<S> ap = d.X[i].apply(b.parent < 0 ? a0 : d.a[b.parent]);  // a'_i = X a_lambda + c_i
+    for (int r = 0; r < 6; ++r) ap(r) += d.c[i](r);
+    const int k = b.v_index;
     switch (b.joint) {
       case JointType::Free: {  // S = I: qdd = (I^A)^-1 (tau - p^A) - a'
-        const Vec6<S> rhs = tau.template segment<6>(b.v_index) - d.pA[i];
-        const Vec6<S> acc = d.root_llt.solve(rhs);
-        qdd.template segment<6>(b.v_index) = acc - ap;
-        d.a[i] = acc;
+        Vec6<S> x;
+        for (int r = 0; r < 6; ++r) x(r) = tau(k + r) - d.pA[i](r);
+        choleskySolve6(d.root_L, x);
+        for (int r = 0; r < 6; ++r) qdd(k + r) = x(r) - ap(r);
+        d.a[i] = x;
         break;
       }
       case JointType::Spherical: {
-        const Vec3<S> x = d.Dinv[i] * (d.u[i] - d.U[i].transpose() * ap);
-        qdd.template segment<3>(b.v_index) = x;
+        const Mat6<S>& U = d.IA[i];  // U = I^A S = first three columns
+        const Mat3<S>& Dinv = d.Dinv[i];
+        S y[3];
+        for (int c = 0; c < 3; ++c)
+          y[c] = d.u[i](c) - (U(0, c) * ap(0) + U(1, c) * ap(1) + U(2, c) * ap(2) + U(3, c) * ap(3) +
+                              U(4, c) * ap(4) + U(5, c) * ap(5));
+        for (int r = 0; r < 3; ++r) {
+          const S x = Dinv(r, 0) * y[0] + Dinv(r, 1) * y[1] + Dinv(r, 2) * y[2];
+          qdd(k + r) = x;
+          ap(r) += x;
+        }
         d.a[i] = ap;
-        d.a[i].template head<3>() += x;
         break;
       }
       case JointType::Revolute: {
-        const S x = d.Dinv[i](0, 0) * (d.u[i](0) - d.U[i].col(0).dot(ap));
-        qdd(b.v_index) = x;
+        const Mat63<S>& U = d.U[i];
+        const S x = d.Dinv[i](0, 0) * (d.u[i](0) - (U(0, 0) * ap(0) + U(1, 0) * ap(1) + U(2, 0) * ap(2) +
+                                                    U(3, 0) * ap(3) + U(4, 0) * ap(4) + U(5, 0) * ap(5)));
+        qdd(k) = x;
+        ap(0) += b.axis.x() * x;
+        ap(1) += b.axis.y() * x;
+        ap(2) += b.axis.z() * x;
         d.a[i] = ap;
-        d.a[i].template head<3>() += b.axis * x;
         break;
       }
       case JointType::Fixed:

@@ -22,10 +22,10 @@ struct Data {
   std::array<Vec6<S>, MaxBodies> bias{};        // v x* I v
   std::array<Mat6<S>, MaxBodies> IA{};          // articulated inertia I^A
   std::array<Vec6<S>, MaxBodies> pA{};          // articulated bias force p^A
-  std::array<Mat63<S>, MaxBodies> U{};          // U_i = I^A_i S_i (first columns used)
+  std::array<Mat63<S>, MaxBodies> U{};          // U_i = I^A_i S_i (revolute: column 0; spherical: read from IA)
   std::array<Mat3<S>, MaxBodies> Dinv{};        // D_i^-1, D_i = S^T I^A S + h (kd + damping)
   std::array<Vec3<S>, MaxBodies> u{};           // u_i = tau_i - S_i^T p^A_i
-  Eigen::LLT<Mat6<S>> root_llt;                 // factor of the free root's I^A
+  Mat6<S> root_L{};                             // Cholesky factor (lower) of the free root's I^A
   // External loads per body (body coordinates), filled by contact: a force f_ext and an
   // acceleration-dependent part -K_ext a (linearly implicit contact), i.e. an added inertia K_ext.
   std::array<Vec6<S>, MaxBodies> fext{};
