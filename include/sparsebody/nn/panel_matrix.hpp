@@ -83,19 +83,39 @@ void pack_panels(const Src* src, int rows, int cols, W* dst, int packed_rows, co
 }
 
 namespace detail {
+// Independent FMA chains to keep in flight: an FMA has ~4 cycles latency and 2 issue per cycle, so
+// >= 8 chains hide it; AVX-512 has 32 vector registers, room for 16. A panel of NB < chains batches
+// therefore splits its columns over K = chains / NB accumulator sets (summed at the end).
+template <typename T>
+inline constexpr int kFmaChains = sizeof(Batch<T>) >= 64 ? 16 : 8;
+
 template <typename T, typename W, int NB>
 inline void panel_gemv(const W* __restrict w, int cols, const T* __restrict x, const T* __restrict bias,
                        T* __restrict y) noexcept {
   using B = Batch<T>;
   constexpr int L = kLanes<T>;
-  B acc[NB];
-  for (int b = 0; b < NB; ++b) acc[b] = bias ? B::load_aligned(bias + b * L) : B(T(0));
-  for (int j = 0; j < cols; ++j) {
+  constexpr int K = kFmaChains<T> / NB > 1 ? kFmaChains<T> / NB : 1;
+  B acc[K][NB];
+  for (int k = 0; k < K; ++k)
+    for (int b = 0; b < NB; ++b) acc[k][b] = B(T(0));
+  int j = 0;
+  for (; j + K <= cols; j += K) {
+    for (int k = 0; k < K; ++k) {
+      const B xj(x[j + k]);
+      const W* wj = w + static_cast<std::size_t>(j + k) * NB * L;
+      for (int b = 0; b < NB; ++b) acc[k][b] = xsimd::fma(load_weights<T, W>(wj + b * L), xj, acc[k][b]);
+    }
+  }
+  for (; j < cols; ++j) {
     const B xj(x[j]);
     const W* wj = w + static_cast<std::size_t>(j) * NB * L;
-    for (int b = 0; b < NB; ++b) acc[b] = xsimd::fma(load_weights<T, W>(wj + b * L), xj, acc[b]);
+    for (int b = 0; b < NB; ++b) acc[0][b] = xsimd::fma(load_weights<T, W>(wj + b * L), xj, acc[0][b]);
   }
-  for (int b = 0; b < NB; ++b) acc[b].store_aligned(y + b * L);
+  for (int b = 0; b < NB; ++b) {
+    B sum = bias ? B::load_aligned(bias + b * L) : B(T(0));
+    for (int k = 0; k < K; ++k) sum += acc[k][b];
+    sum.store_aligned(y + b * L);
+  }
 }
 }  // namespace detail
 
