@@ -36,13 +36,19 @@ def pipeline_meta(hidden, latent, training=None, trained_on_bandai=True):
         "hidden": hidden,
         "latent": latent,
     }
+    return add_provenance(m, trained_on_bandai, training)
+
+
+def add_provenance(meta, trained_on_bandai, training=None):
+    """Adds the data credit and non-commercial note (weights trained on the Bandai Namco data must carry
+    them) and the training record to a weights file's meta; returns meta."""
     if trained_on_bandai:
-        m["credit"] = CREDIT
-        m["license"] = "CC BY-NC 4.0"
-        m["non_commercial"] = NON_COMMERCIAL
+        meta["credit"] = CREDIT
+        meta["license"] = "CC BY-NC 4.0"
+        meta["non_commercial"] = NON_COMMERCIAL
     if training:
-        m["training"] = training
-    return m
+        meta["training"] = training
+    return meta
 
 
 def export(checkpoint, out, training_command=None):

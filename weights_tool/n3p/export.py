@@ -6,7 +6,7 @@ import numpy as np
 import torch
 
 from ..format import write_weights
-from ..lobstr.export import CREDIT, NON_COMMERCIAL
+from ..lobstr.export import add_provenance
 from ..lobstr.standard import STANDARD
 from . import layout as L
 from .dataset import KEYS
@@ -55,13 +55,7 @@ def meta(init, hidden, training=None, trained_on_bandai=True):
         "standing_hips_height": STANDARD["standing_hips_height"],
         "standing_head_height": STANDARD["standing_head_height"],
     }
-    if trained_on_bandai:
-        m["credit"] = CREDIT
-        m["license"] = "CC BY-NC 4.0"
-        m["non_commercial"] = NON_COMMERCIAL
-    if training:
-        m["training"] = training
-    return m
+    return add_provenance(m, trained_on_bandai, training)
 
 
 def export_nets(nets, prefix, init, training=None, trained_on_bandai=True, dtype="float32"):

@@ -51,16 +51,10 @@ def cmu_trackers(path=CMU, frames=200, step=4):
     return TP[::step][:frames], TQ6[::step][:frames]
 
 
-def write(out_dir):
-    os.makedirs(out_dir, exist_ok=True)
-    nets, init = small_nets()
-    prefix = os.path.join(out_dir, "n3p_small")
-    export_nets(nets, prefix, init, training={"note": "random weights for the parity test"}, trained_on_bandai=False)
-    TP, TQ6 = cmu_trackers()
+def _rollout_fields(nets, init, TP, TQ6, present):
+    """The golden fields of an autoregressive float64 rollout (Eq. 2) over trackers TP/TQ6 with the
+    per-frame controller presence `present`, starting from the default state `init`."""
     F = len(TP)
-    present = np.ones((F, 3), bool)
-    present[60:120, 1:] = False
-    present[150:180, 1] = False
     d = torch.float64
     tp, tq = torch.tensor(TP, dtype=d)[None], torch.tensor(TQ6, dtype=d)[None]
     o0 = torch.tensor(init["o"], dtype=d)[None]
@@ -70,13 +64,26 @@ def write(out_dir):
                             torch.tensor(init["g_up"], dtype=d)[None], o0, torch.tensor(present)[None])
         P, _ = world_pose(out["h"][0], out["glo"][0], out["gup"][0])
     r = lambda a: np.round(np.asarray(a, dtype=np.float64), 9).tolist()
+    return {"frames": F, "state_every": STATE_EVERY,
+            "trackers_p": TP.reshape(F, 9).tolist(), "trackers_q6": TQ6.reshape(F, 18).tolist(),
+            "present": present.astype(int).tolist(),
+            "h": r(out["h"][0]), "z": r(out["z"][0]), "o_star": r(out["ostar"][0]),
+            "g_lo": r(out["glo"][0][::STATE_EVERY]), "g_up": r(out["gup"][0][::STATE_EVERY]),
+            "positions": r(P.reshape(F, -1))}
+
+
+def write(out_dir):
+    os.makedirs(out_dir, exist_ok=True)
+    nets, init = small_nets()
+    prefix = os.path.join(out_dir, "n3p_small")
+    export_nets(nets, prefix, init, training={"note": "random weights for the parity test"}, trained_on_bandai=False)
+    TP, TQ6 = cmu_trackers()
+    present = np.ones((len(TP), 3), bool)
+    present[60:120, 1:] = False
+    present[150:180, 1] = False
     g = {"source": "CMU 01_01 (resampled to 30 fps), random small sub-predictors; weights_tool.n3p golden",
-         "hidden": list(HIDDEN), "frames": F, "state_every": STATE_EVERY,
-         "trackers_p": TP.reshape(F, 9).tolist(), "trackers_q6": TQ6.reshape(F, 18).tolist(),
-         "present": present.astype(int).tolist(),
-         "h": r(out["h"][0]), "z": r(out["z"][0]), "o_star": r(out["ostar"][0]),
-         "g_lo": r(out["glo"][0][::STATE_EVERY]), "g_up": r(out["gup"][0][::STATE_EVERY]),
-         "positions": r(P.reshape(F, -1))}
+         "hidden": list(HIDDEN)}
+    g.update(_rollout_fields(nets, init, TP, TQ6, present))
     with open(prefix + ".golden.json", "w") as f:
         json.dump(g, f, separators=(",", ":"))
     return prefix
@@ -88,25 +95,11 @@ def write_default(prefix, out_path, frames=100):
     from .weights import load
     nets, init = load(prefix)
     TP, TQ6 = cmu_trackers(frames=frames)
-    F = len(TP)
-    present = np.ones((F, 3), bool)
+    present = np.ones((len(TP), 3), bool)
     present[40:70, 1:] = False
-    d = torch.float64
-    tp, tq = torch.tensor(TP, dtype=d)[None], torch.tensor(TQ6, dtype=d)[None]
-    o0 = torch.tensor(init["o"], dtype=d)[None]
-    h0 = initial_heading(tp[:, 0], tq[:, 0], o0)
-    with torch.no_grad():
-        out, _, _ = rollout(nets, tp, tq, h0, torch.tensor(init["g_lo"], dtype=d)[None],
-                            torch.tensor(init["g_up"], dtype=d)[None], o0, torch.tensor(present)[None])
-        P, _ = world_pose(out["h"][0], out["glo"][0], out["gup"][0])
-    r = lambda a: np.round(np.asarray(a, dtype=np.float64), 9).tolist()
     g = {"source": f"CMU 01_01 (resampled to 30 fps), default weights {os.path.basename(prefix)}_*.json; "
-                   "weights_tool.n3p golden --default", "frames": F, "state_every": STATE_EVERY,
-         "trackers_p": TP.reshape(F, 9).tolist(), "trackers_q6": TQ6.reshape(F, 18).tolist(),
-         "present": present.astype(int).tolist(),
-         "h": r(out["h"][0]), "z": r(out["z"][0]), "o_star": r(out["ostar"][0]),
-         "g_lo": r(out["glo"][0][::STATE_EVERY]), "g_up": r(out["gup"][0][::STATE_EVERY]),
-         "positions": r(P.reshape(F, -1))}
+                   "weights_tool.n3p golden --default"}
+    g.update(_rollout_fields(nets, init, TP, TQ6, present))
     with open(out_path, "w") as f:
         json.dump(g, f, separators=(",", ":"))
     return out_path
