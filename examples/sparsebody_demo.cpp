@@ -1,7 +1,13 @@
-// sparsebody_demo: runs the LoBSTr pipeline on a mocap clip or a recorded tracker stream.
+// sparsebody_demo: runs a sparsebody pipeline on a mocap clip or a recorded tracker stream.
 //
-//   sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--weights FILE] [--mode streaming|window]
-//                   [--no-contact-ik] [--trackers-out trackers.csv] [--calibration-frame N] [--quiet]
+//   sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p] [--no-pelvis]
+//                   [--weights FILE|DIR] [--mode streaming|window] [--no-contact-ik]
+//                   [--trackers-out trackers.csv] [--calibration-frame N] [--quiet]
+//
+// Model choice (--model auto, the default): LoBSTr when the input has a pelvis tracker (it needs
+// one), Neural3Points (direct mode) when it has only the headset and controllers, which is what
+// every headset has. The demo prints which model it picked and why. --no-pelvis drops the pelvis
+// tracker from the input (a BVH clip synthesises one from the hips) to see the 3-point model.
 //
 // BVH input: the skeleton is mapped by joint names (pose/joint_map.hpp) and scaled by leg length to
 // the standard skeleton; headset, controllers and pelvis tracker are synthesised from the head,
@@ -14,10 +20,12 @@
 #include <cstring>
 #include <fstream>
 #include <iostream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "sparsebody/avatar/lobstr_pipeline.hpp"
+#include "sparsebody/avatar/n3p_direct.hpp"
 #include "sparsebody/io/bvh.hpp"
 #include "sparsebody/io/tracker_csv.hpp"
 #include "sparsebody/trackers/synthesis.hpp"
@@ -26,17 +34,22 @@ using namespace sparsebody;
 
 namespace {
 
+enum class Model { Auto, LoBSTr, N3P };
+
 struct Options {
-  std::string input, output = "avatar.bvh", weights = SPARSEBODY_DEFAULT_WEIGHTS, trackers_out;
+  std::string input, output = "avatar.bvh", weights, trackers_out;
+  Model model = Model::Auto;
   avatar::RunMode mode = avatar::RunMode::Streaming;
-  bool contact_ik = true, quiet = false;
+  bool contact_ik = true, quiet = false, no_pelvis = false;
   int calibration_frame = 0;
 };
 
 [[noreturn]] void usage(const char* msg) {
   std::fprintf(stderr,
-               "%s\nusage: sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--weights FILE] [--mode streaming|window]\n"
-               "                       [--no-contact-ik] [--trackers-out trackers.csv] [--calibration-frame N] [--quiet]\n",
+               "%s\nusage: sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p] [--no-pelvis]\n"
+               "                       [--weights FILE (LoBSTr) | DIR (Neural3Points: n3p_{signal,lower,upper}.json)]\n"
+               "                       [--mode streaming|window] [--no-contact-ik] [--trackers-out trackers.csv]\n"
+               "                       [--calibration-frame N] [--quiet]\n",
                msg);
   std::exit(2);
 }
@@ -48,6 +61,13 @@ Options parse(int argc, char** argv) {
     auto next = [&]() -> std::string { if (i + 1 >= argc) usage(("missing value after " + a).c_str()); return argv[++i]; };
     if (a == "-o" || a == "--output") o.output = next();
     else if (a == "--weights") o.weights = next();
+    else if (a == "--model") {
+      const std::string m = next();
+      if (m == "auto") o.model = Model::Auto;
+      else if (m == "lobstr") o.model = Model::LoBSTr;
+      else if (m == "n3p" || m == "neural3points") o.model = Model::N3P;
+      else usage("--model must be auto, lobstr or n3p");
+    } else if (a == "--no-pelvis") o.no_pelvis = true;
     else if (a == "--mode") {
       const std::string m = next();
       if (m == "streaming") o.mode = avatar::RunMode::Streaming;
@@ -57,7 +77,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--trackers-out") o.trackers_out = next();
     else if (a == "--calibration-frame") o.calibration_frame = std::stoi(next());
     else if (a == "--quiet") o.quiet = true;
-    else if (a == "-h" || a == "--help") usage("LoBSTr avatar from sparse trackers");
+    else if (a == "-h" || a == "--help") usage("full-body avatar from sparse VR trackers (LoBSTr or Neural3Points)");
     else if (!a.empty() && a[0] == '-') usage(("unknown option " + a).c_str());
     else o.input = a;
   }
@@ -95,56 +115,97 @@ struct Metrics {
   long n = 0, n_rot = 0, n_skate = 0, n_jit = 0, contact_ok = 0, contact_n = 0;
 };
 
-template <int Hidden, int Latent>
-int run(const Options& o, std::shared_ptr<const typename avatar::LoBSTrPipeline<float, Hidden, Latent>::Weights> w) {
-  using Pipeline = avatar::LoBSTrPipeline<float, Hidden, Latent>;
-  avatar::LoBSTrConfig cfg;
-  cfg.mode = o.mode;
-  cfg.contact_ik = o.contact_ik;
-  Pipeline pipe(w, cfg);
-  const pose::Skeleton& std_skel = pipe.skeleton();
-  const pose::JointMap& std_map = pipe.joint_map();
-
+// The input, read once: tracker frames, and for a BVH clip the clip itself as ground truth.
+struct Input {
   std::vector<trackers::TrackerFrame> frames;
   io::BvhClip clip;
   Truth truth;
-  const bool have_truth = ends_with(o.input, ".bvh") || ends_with(o.input, ".BVH");
-  double input_fps = 0;
-  if (have_truth) {
-    clip = io::read_bvh(o.input);
-    const pose::JointMap map = pose::JointMap::from_names(clip.skeleton, o.input);
-    const double units = trackers::guess_units(clip.skeleton, map);
-    trackers::SyntheticTrackers syn = trackers::synthesize_trackers(clip, map, units);
-    frames = std::move(syn.frames);
-    features::Calibration c;  // synthesised trackers are calibrated already; only the size differs
-    c.scale = pose::leg_length(std_skel, std_map) / syn.leg;
-    pipe.set_calibration(c);
-    truth.init(clip, map, units, syn.floor);
-    input_fps = 1.0 / clip.frame_time;
-    std::printf("input   %s: %d frames at %.1f fps, %d joints, units %.4g m, leg %.3f m -> scale %.3f to the standard skeleton\n",
-                o.input.c_str(), clip.frames, input_fps, clip.skeleton.size(), units, syn.leg, c.scale);
-    if (!o.trackers_out.empty()) {
-      auto xr = frames;
-      trackers::to_openxr_convention(xr);
-      io::write_tracker_csv(o.trackers_out, xr, "synthesised from " + o.input + "; T-pose calibration frame 0");
-      std::printf("wrote   %s (synthesised trackers, OpenXR convention)\n", o.trackers_out.c_str());
-    }
+  bool have_truth = false;
+  double leg = 0;  // BVH: the clip's leg length (m), to scale it to the standard skeleton
+  double fps = 0;
+  bool pelvis = false;  // any valid pelvis tracker frame
+};
+
+void read_input(const Options& o, Input& in) {
+  in.have_truth = ends_with(o.input, ".bvh") || ends_with(o.input, ".BVH");
+  if (in.have_truth) {
+    in.clip = io::read_bvh(o.input);
+    const pose::JointMap map = pose::JointMap::from_names(in.clip.skeleton, o.input);
+    const double units = trackers::guess_units(in.clip.skeleton, map);
+    trackers::SyntheticTrackers syn = trackers::synthesize_trackers(in.clip, map, units);
+    in.frames = std::move(syn.frames);
+    in.leg = syn.leg;
+    in.truth.init(in.clip, map, units, syn.floor);
+    in.fps = 1.0 / in.clip.frame_time;
+    std::printf("input   %s: %d frames at %.1f fps, %d joints, units %.4g m, leg %.3f m\n", o.input.c_str(), in.clip.frames,
+                in.fps, in.clip.skeleton.size(), units, syn.leg);
   } else {
-    frames = io::read_tracker_csv(o.input);
-    if (frames.empty()) { std::fprintf(stderr, "%s: no frames\n", o.input.c_str()); return 1; }
+    in.frames = io::read_tracker_csv(o.input);
+    if (in.frames.empty()) throw std::runtime_error(o.input + ": no frames");
+    in.fps = in.frames.size() > 1 ? (in.frames.size() - 1) / (in.frames.back().time - in.frames.front().time) : 30;
+    std::printf("input   %s: %zu tracker frames (~%.1f fps)\n", o.input.c_str(), in.frames.size(), in.fps);
+  }
+  if (o.no_pelvis)
+    for (auto& f : in.frames) f.valid[static_cast<int>(trackers::Tracker::Pelvis)] = false;
+  for (const auto& f : in.frames) in.pelvis = in.pelvis || f.valid[static_cast<int>(trackers::Tracker::Pelvis)];
+  if (!o.trackers_out.empty()) {
+    auto xr = in.frames;
+    if (in.have_truth) trackers::to_openxr_convention(xr);
+    io::write_tracker_csv(o.trackers_out, xr,
+                          in.have_truth ? "synthesised from " + o.input + "; T-pose calibration frame 0" : "copy of " + o.input);
+    std::printf("wrote   %s (%s trackers, OpenXR convention)\n", o.trackers_out.c_str(), in.have_truth ? "synthesised" : "input");
+  }
+}
+
+// What differs between the pipelines, as overloads; everything else (push, has_output, pose,
+// world, skeleton, joint_map, contact, user_scale, meta().frame_rate) has the same shape.
+template <int H, int L>
+void set_scale(avatar::LoBSTrPipeline<float, H, L>& p, double s) {
+  features::Calibration c;
+  c.scale = s;
+  p.set_calibration(c);
+}
+template <typename T, int A, int B, int C, typename W>
+void set_scale(avatar::N3PPipeline<T, A, B, C, W>& p, double s) {
+  features::n3p::N3PCalibration c;
+  c.base.scale = s;
+  p.set_calibration(c);
+}
+template <int H, int L>
+void describe(const avatar::LoBSTrPipeline<float, H, L>& p, const Options& o) {
+  std::printf("model   LoBSTr %s: H=%d latent=%d, %s mode%s, %.0f fps\n", o.weights.c_str(), H, L,
+              o.mode == avatar::RunMode::Streaming ? "streaming" : ("window (" + std::to_string(p.window()) + " frames)").c_str(),
+              o.contact_ik ? ", contact IK" : "", p.meta().frame_rate);
+}
+template <typename T, int A, int B, int C, typename W>
+void describe(const avatar::N3PPipeline<T, A, B, C, W>& p, const Options& o) {
+  std::printf("model   Neural3Points direct mode %s: G_sig/G_lo/G_up hidden %d/%d/%d, %s, %.0f fps\n", o.weights.c_str(), A, B, C,
+              o.contact_ik ? "foot-contact and hand IK" : "no IK", p.meta().frame_rate);
+}
+
+template <class Pipeline>
+int run(const Options& o, Pipeline& pipe, Input& in, const std::string& credit) {
+  const pose::Skeleton& std_skel = pipe.skeleton();
+  const pose::JointMap& std_map = pipe.joint_map();
+  const std::vector<trackers::TrackerFrame>& frames = in.frames;
+  const io::BvhClip& clip = in.clip;
+  Truth& truth = in.truth;
+  const bool have_truth = in.have_truth;
+  if (have_truth) {
+    // synthesised trackers are calibrated already; only the size differs
+    const double s = pose::leg_length(std_skel, std_map) / in.leg;
+    set_scale(pipe, s);
+    std::printf("scale   %.3f to the standard skeleton (leg length)\n", s);
+  } else {
     if (o.calibration_frame < 0 || o.calibration_frame >= static_cast<int>(frames.size()) ||
         !pipe.calibrate(frames[static_cast<std::size_t>(o.calibration_frame)])) {
       std::fprintf(stderr, "%s: frame %d cannot be used for calibration (headset invalid or too low)\n", o.input.c_str(), o.calibration_frame);
       return 1;
     }
-    input_fps = frames.size() > 1 ? (frames.size() - 1) / (frames.back().time - frames.front().time) : 30;
-    std::printf("input   %s: %zu tracker frames (~%.1f fps); calibrated on frame %d, scale %.3f\n", o.input.c_str(),
-                frames.size(), input_fps, o.calibration_frame, pipe.calibration().scale);
+    std::printf("calib   T-pose on frame %d, user scale %.3f\n", o.calibration_frame, pipe.user_scale());
   }
-  std::printf("model   %s: H=%d latent=%d, %s mode%s, %.0f fps\n", o.weights.c_str(), Hidden, Latent,
-              o.mode == avatar::RunMode::Streaming ? "streaming" : ("window (" + std::to_string(pipe.window()) + " frames)").c_str(),
-              o.contact_ik ? ", contact IK" : "", pipe.meta().frame_rate);
-  if (!w->info().credit.empty()) std::printf("weights credit: %s\n", w->info().credit.c_str());
+  describe(pipe, o);
+  if (!credit.empty()) std::printf("weights credit: %s\n", credit.c_str());
 
   const double user = pipe.user_scale();
   io::BvhWriter writer(std_skel, 1.0 / pipe.meta().frame_rate, 100.0 * user);
@@ -152,8 +213,12 @@ int run(const Options& o, std::shared_ptr<const typename avatar::LoBSTrPipeline<
   const pose::Role roles[] = {pose::Role::Hips, pose::Role::Head, pose::Role::HandL, pose::Role::HandR, pose::Role::UpLegL,
                               pose::Role::UpLegR, pose::Role::LegL, pose::Role::LegR, pose::Role::FootL, pose::Role::FootR,
                               pose::Role::ToeL, pose::Role::ToeR};
+  const pose::Role lower_roles[8] = {pose::Role::UpLegL, pose::Role::UpLegR, pose::Role::LegL, pose::Role::LegR,
+                                     pose::Role::FootL, pose::Role::FootR, pose::Role::ToeL, pose::Role::ToeR};
+  int lower[8];
+  for (int k = 0; k < 8; ++k) lower[k] = std_map[lower_roles[k]];
   const bool same_skeleton = have_truth && clip.skeleton.size() >= std_skel.size() &&
-                             [&] { for (int i = 0; i < 8; ++i) if (clip.skeleton.find(std_skel.names[pipe.meta().lower[i]]) < 0) return false; return true; }();
+                             [&] { for (int i = 0; i < 8; ++i) if (clip.skeleton.find(std_skel.names[lower[i]]) < 0) return false; return true; }();
   Metrics m;
   std::vector<Eigen::Vector3d> hist[3];  // last positions of the lower-body joints for jitter
   std::vector<Eigen::Vector3d> toe_prev(2), gt_toe_prev(2);
@@ -204,14 +269,14 @@ int run(const Options& o, std::shared_ptr<const typename avatar::LoBSTrPipeline<
         }
         if (same_skeleton) {
           for (int k = 0; k < 8; ++k) {
-            const int sj = pipe.meta().lower[k], cj = clip.skeleton.find(std_skel.names[sj]);
+            const int sj = lower[k], cj = clip.skeleton.find(std_skel.names[sj]);
             m.rot += out.local[sj].angularDistance(truth.tmp.local[cj]) * 180.0 / M_PI / 8;
           }
           ++m.n_rot;
         }
         // jitter: |third difference| * fps^3 over the lower-body joints
         std::vector<Eigen::Vector3d> cur;
-        for (int k = 0; k < 8; ++k) cur.push_back(W.position[pipe.meta().lower[k]] * user);
+        for (int k = 0; k < 8; ++k) cur.push_back(W.position[lower[k]] * user);
         if (!hist[2].empty()) {
           double j = 0;
           for (int k = 0; k < 8; ++k) j += (cur[k] - 3 * hist[0][k] + 3 * hist[1][k] - hist[2][k]).norm() / 8;
@@ -245,18 +310,56 @@ int run(const Options& o, std::shared_ptr<const typename avatar::LoBSTrPipeline<
   return 0;
 }
 
+template <int Hidden, int Latent>
+int run_lobstr(const Options& o, Input& in) {
+  using Pipeline = avatar::LoBSTrPipeline<float, Hidden, Latent>;
+  const auto w = Pipeline::load(o.weights);
+  avatar::LoBSTrConfig cfg;
+  cfg.mode = o.mode;
+  cfg.contact_ik = o.contact_ik;
+  Pipeline pipe(w, cfg);
+  return run(o, pipe, in, w->info().credit);
+}
+
+int run_n3p(const Options& o, Input& in) {
+  using Pipeline = avatar::N3PPipeline<float, 64, 128, 128>;  // the paper's sizes (the shipped weights)
+  if (o.mode != avatar::RunMode::Streaming) std::printf("note    --mode window is LoBSTr-only; Neural3Points always streams\n");
+  const auto w = Pipeline::load(o.weights);
+  avatar::N3PConfig cfg;
+  cfg.foot_ik = o.contact_ik;
+  Pipeline pipe(w, cfg);
+  return run(o, pipe, in, w.lo->info().credit);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  const Options o = parse(argc, argv);
+  Options o = parse(argc, argv);
   try {
+    Input in;
+    read_input(o, in);
+    Model model = o.model;
+    if (model == Model::Auto) {
+      model = in.pelvis ? Model::LoBSTr : Model::N3P;
+      std::printf("choice  %s: %s (--model lobstr|n3p to override)\n", model == Model::LoBSTr ? "LoBSTr" : "Neural3Points",
+                  in.pelvis ? "the input has a pelvis tracker, which LoBSTr uses for the lower body"
+                            : "the input has only a headset and controllers (no pelvis tracker)");
+    } else if (model == Model::LoBSTr && !in.pelvis) {
+      std::fprintf(stderr, "error: %s has no valid pelvis tracker frame; LoBSTr needs one (use --model n3p)\n", o.input.c_str());
+      return 1;
+    }
+    if (model == Model::N3P) {
+      if (o.weights.empty()) o.weights = SPARSEBODY_DEFAULT_N3P_WEIGHTS;
+      return run_n3p(o, in);
+    }
+    if (o.weights.empty()) o.weights = SPARSEBODY_DEFAULT_WEIGHTS;
     std::ifstream probe(o.weights);
     if (!probe) usage(("cannot open weights " + o.weights).c_str());
     const auto doc = nlohmann::json::parse(probe);
     const int hidden = doc.at("meta").value("hidden", 256), latent = doc.at("meta").value("latent", 128);
-    if (hidden == 256 && latent == 128) return run<256, 128>(o, avatar::LoBSTrPipeline<float, 256, 128>::load(o.weights));
-    if (hidden == 1024 && latent == 128) return run<1024, 128>(o, avatar::LoBSTrPipeline<float, 1024, 128>::load(o.weights));
-    if (hidden == 32 && latent == 16) return run<32, 16>(o, avatar::LoBSTrPipeline<float, 32, 16>::load(o.weights));
+    if (hidden == 256 && latent == 128) return run_lobstr<256, 128>(o, in);
+    if (hidden == 1024 && latent == 128) return run_lobstr<1024, 128>(o, in);
+    if (hidden == 32 && latent == 16) return run_lobstr<32, 16>(o, in);
     std::fprintf(stderr, "%s: no build of this demo for H=%d latent=%d (compiled: 256/128, 1024/128, 32/16)\n", o.weights.c_str(), hidden, latent);
     return 1;
   } catch (const LoadError& e) {
