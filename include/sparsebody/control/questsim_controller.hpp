@@ -1,0 +1,300 @@
+// QuestSim torque-policy tracking (Winkler et al., SIGGRAPH Asia 2022, §3, Appendix A): headset and
+// two controllers in, a simulated full-body avatar out.
+//
+//   TrackerFrame (any rate) -> Resampler (36 Hz) -> TrackerSanitizer (bad input)
+//     -> window of sensor frames t .. t+NF (a shift register, NF = 6)
+//     -> observation o (questsim_observation.hpp) -> policy pi: MLP [400, 300, 200], tanh
+//     -> a in [-1, 1]^NJ, tau = 200 N m * a on every non-root DoF (direct torques, no PD)
+//     -> 2 simulation substeps of 1/72 s (Simulator in ControlMode::Torque).
+//
+// Latency (§3.5): the policy acting for user time t observes frames up to t + NF, so it can only run
+// once frame t + NF has arrived. The character therefore tracks the user NF control periods late:
+// NF / 36 Hz = 6 / 36 s = 166.7 ms (the paper's "160 ms"). latency() returns it, trackedTime() the
+// user time the character currently corresponds to (newest tick time - latency()).
+// Start-up: the window is filled with the first usable frame, so control starts immediately, as if
+// the user had stood still for NF frames before.
+//
+// Avatar scale (§3.6): the avatar is character::avatarForUserHeight(h) (lengths x h/1.75, masses x
+// (h/1.75)^3, inertias x (h/1.75)^5), h the user's height estimated by userHeightFromHeadset() from a
+// frame where the user stands upright: h = headset height / eye_height_ratio (0.936: eye height over
+// stature, Drillis & Contini 1966). The same h is the observation's o_user,scale. The height is fixed
+// for the controller's lifetime (building a model allocates); make a new controller for a new user.
+// Joint "friction of 0.1" (Appendix A) is a passive viscous damping of 0.1 N m s/rad on every joint,
+// integrated implicitly by the simulator. Floor friction is the simulator's default mu = 1.0.
+//
+// Recovery (each is reported by tick()/controlStep() and counted):
+//   - bad tracker input (trackers/sanitizer.hpp): NaN/Inf, a non-unit quaternion, an invalid flag or
+//     a jump > 1 m in one tick make a device invalid for that tick and its last good pose is held;
+//     before the first valid headset frame nothing is simulated (Waiting); a long headset loss
+//     (> 0.5 s) or a tracking-origin jump (a jump confirmed 3 ticks in a row) -> TrackerReset: the
+//     window is refilled with the current frame and the character stands again under the headset
+//     (during a long loss this repeats every tick, i.e. the character is held standing under the
+//     last headset pose until the headset returns; tracking then resumes without a further reset);
+//     frames with a non-finite time are dropped and a time gap > 0.25 s restarts (Resampler);
+//   - non-finite observation (cannot happen with finite state and sanitised input; guarded anyway)
+//     or non-finite policy output -> RejectedAction: zero torques for this step;
+//   - a substep that fails (StepStatus != Ok: the simulator has already rolled the state back)
+//     -> SimulationFailure: the character is reset to standing under the headset of frame t;
+//   - a fall: root (Hips) height below fall_height_ratio x its standing height, or the root's up axis
+//     tilted beyond fall_tilt -> Fall: same reset. (QuestSim trains with early termination and does
+//     not describe a run-time recovery; this is ours.)
+// Nothing non-finite ever leaves a step: the state is the simulator's (which never stores a
+// non-finite number), torques are finite by construction. tick(), push() and controlStep() never
+// allocate, throw or lock; the constructor allocates everything once.
+//
+// Use:
+//   auto w = control::QuestSimController<>::loadWeights("questsim_policy.json");   // kind "questsim_policy"
+//   const double h = control::userHeightFromHeadset(standing_frame);                // NaN if unusable
+//   control::QuestSimController<> c(w, h);
+//   for (frame : frames) c.push(frame);            // any rate; runs one control step per 36 Hz tick
+//   c.simulator().data().R[i], .p[i]               // the avatar's body poses (world = stage space)
+#pragma once
+#include <array>
+#include <cmath>
+#include <memory>
+#include <string>
+
+#include "sparsebody/character/avatar.hpp"
+#include "sparsebody/control/questsim_observation.hpp"
+#include "sparsebody/networks/policy_nets.hpp"
+#include "sparsebody/nn/network.hpp"
+#include "sparsebody/trackers/resampler.hpp"
+#include "sparsebody/trackers/sanitizer.hpp"
+
+namespace sparsebody::control {
+
+struct QuestSimConfig {
+  double control_rate = 36.0;      // Hz: policy rate (Appendix A: 1/36 s)
+  int substeps = 2;                // simulation substeps per control step (Appendix A)
+  double torque_scale = 200.0;     // N m per unit of policy output (Appendix A: [-1, 1] -> [-200, 200])
+  double joint_damping = 0.1;      // passive joint damping, N m s/rad (Appendix A: "friction of 0.1")
+  double eye_height_ratio = 0.936; // standing headset height / stature
+  double min_height = 1.0, max_height = 2.4;  // heights accepted by userHeightFromHeadset (m)
+  double fall_height_ratio = 0.5;  // root below this fraction of its standing height: fallen
+  double fall_tilt = 1.2;          // rad (~69 deg): root up-axis tilt beyond this: fallen
+  double max_gap = 0.25;           // s: resampler time gap that restarts
+  trackers::SanitizerConfig sanitizer{};
+};
+
+// What happened in a control tick.
+enum class QuestSimEvent : unsigned char {
+  Stepped = 0,        // observation, policy and substeps ran normally
+  Waiting,            // no valid headset frame yet: nothing simulated
+  TrackerReset,       // tracker restart (long loss, origin jump, time gap): character reset, then stepped
+  RejectedAction,     // non-finite observation or policy output: zero torques were applied
+  SimulationFailure,  // a substep failed (see lastSimStatus()): character reset to standing
+  Fall,               // the character fell: reset to standing
+};
+inline const char* eventName(QuestSimEvent e) {
+  switch (e) {
+    case QuestSimEvent::Stepped: return "stepped";
+    case QuestSimEvent::Waiting: return "waiting";
+    case QuestSimEvent::TrackerReset: return "tracker reset";
+    case QuestSimEvent::RejectedAction: return "rejected action";
+    case QuestSimEvent::SimulationFailure: return "simulation failure";
+    default: return "fall";
+  }
+}
+
+// User height (m) from a frame where the user stands upright: headset height / eye_height_ratio.
+// NaN when the headset is invalid or non-finite, or the height is outside [min_height, max_height].
+inline double userHeightFromHeadset(const trackers::TrackerFrame& standing, const QuestSimConfig& cfg = {}) noexcept {
+  const int H = static_cast<int>(trackers::Tracker::Head);
+  const double y = standing.pose[H].position.y;
+  if (!standing.valid[H] || !std::isfinite(y)) return std::nan("");
+  const double h = y / cfg.eye_height_ratio;
+  return (h >= cfg.min_height && h <= cfg.max_height) ? h : std::nan("");
+}
+
+// S: simulation scalar; W: the policy's weight storage (float, or nn::f16); NF future frames;
+// NB / NJ: the avatar's bodies and non-root DoFs (the default avatar's unless a custom one is given).
+template <class S = float, class W = float, int NF = 6, int NB = kDefaultAvatarBodies, int NJ = kDefaultAvatarJointDofs>
+class QuestSimController {
+ public:
+  static constexpr int MB = 24, MD = 72;  // bounds of character::defaultAvatar
+  using Model = dynamics::Model<S, MB, MD>;
+  using Sim = dynamics::Simulator<S, MB, MD>;
+  using Builder = QuestSimObservationBuilder<S, MB, MD, NB, NJ, NF>;
+  using Layout = typename Builder::Layout;
+  static constexpr int kObservationSize = Layout::size;
+  static constexpr int kActionSize = NJ;
+  using Net = networks::QuestSimPolicyNet<float, kObservationSize, NJ, W>;
+  using Weights = nn::NetworkWeights<Net>;
+  using Window = typename Builder::UserWindow;
+
+  static std::shared_ptr<const Weights> loadWeights(const std::string& path) {
+    return Weights::load(path, networks::kQuestSimPolicyKind);
+  }
+
+  // Avatar scaled to `user_height` (m). Throws std::invalid_argument for a non-finite or
+  // non-positive height, or when the avatar does not have NB bodies / NJ + 6 DoFs.
+  QuestSimController(std::shared_ptr<const Weights> weights, double user_height, QuestSimConfig cfg = {},
+                     character::AvatarOptions avatar = {})
+      : QuestSimController(std::move(weights), scaledAvatar(user_height, cfg, avatar), user_height, cfg) {}
+
+  // A custom model (already at the user's scale; its joint damping is used as given).
+  QuestSimController(std::shared_ptr<const Weights> weights, const Model& model, double user_height, QuestSimConfig cfg)
+      : cfg_(cfg), height_(S(user_height)), sim_(std::make_unique<Sim>(model)), obs_builder_(model),
+        policy_(std::move(weights)), resampler_(cfg.control_rate, cfg.max_gap), sanitizer_(cfg.sanitizer) {
+    if (!(cfg.substeps >= 1) || !(cfg.control_rate > 0))
+      throw std::invalid_argument("QuestSimController: substeps >= 1 and control_rate > 0 required");
+    sim_->mode = dynamics::ControlMode::Torque;
+    h_ = S(1.0 / (cfg.control_rate * cfg.substeps));
+    standing_q_ = model.neutralConfiguration();
+    standing_root_y_ = standing_q_(1);
+    zero_v_ = Sim::VecV::Zero(model.nv);
+    tau_ = zero_v_;
+    sim_->torques().setZero();
+    obs_.fill(0.f);
+    action_.fill(0.f);
+  }
+
+  // Control period and the latency of the future frames (NF control periods).
+  double controlPeriod() const noexcept { return 1.0 / cfg_.control_rate; }
+  double latency() const noexcept { return NF / cfg_.control_rate; }
+  double userHeight() const noexcept { return double(height_); }
+
+  // Any-rate input: resampled to the control rate; one tick (and control step) per 36 Hz sample.
+  // Returns the number of ticks run.
+  int push(const trackers::TrackerFrame& f) noexcept {
+    return resampler_.push(f, [this](const trackers::TrackerFrame& t, bool reset) { tick(t, reset); });
+  }
+
+  // One control tick from a frame already at the control rate (time = this tick's user time).
+  QuestSimEvent tick(const trackers::TrackerFrame& f, bool restart = false) noexcept {
+    const trackers::SanitizedFrame& sf = sanitizer_.process(f, controlPeriod());
+    if (!sf.usable) return last_event_ = QuestSimEvent::Waiting;
+    QuestSimSensorFrame<S> frame;
+    for (int dev = 0; dev < 3; ++dev) {
+      frame[dev].position = sf.pose[dev].position.template cast<S>();
+      frame[dev].rotation = sf.pose[dev].orientation.toRotationMatrix().template cast<S>();
+    }
+    const bool reset = !started_ || restart || sf.reset;
+    if (reset) {
+      window_.fill(frame);
+      times_.fill(f.time);
+      standUnderHeadset(frame);
+      if (started_) ++tracker_resets_;
+    } else {
+      for (int k = 0; k < NF; ++k) { window_[k] = window_[k + 1]; times_[k] = times_[k + 1]; }
+      window_[NF] = frame;
+      times_[NF] = f.time;
+    }
+    const bool was_started = started_;
+    started_ = true;
+    const QuestSimEvent e = controlStep();
+    if (reset && was_started && e == QuestSimEvent::Stepped) return last_event_ = QuestSimEvent::TrackerReset;
+    return e;
+  }
+
+  // The control step on the current window: observation, policy, torques, substeps, fall check.
+  QuestSimEvent controlStep() noexcept {
+    QuestSimEvent e = QuestSimEvent::Stepped;
+    obs_builder_.build(*sim_, window_, height_, obs_.data());
+    bool finite = true;
+    for (float x : obs_) finite &= static_cast<bool>(std::isfinite(x));
+    if (finite && policy_.step_guarded(obs_.data()) == nn::StepStatus::kOk) {
+      const float* a = policy_.output().data();
+      for (int k = 0; k < NJ; ++k) action_[k] = std::fmin(1.f, std::fmax(-1.f, a[k]));
+    } else {
+      if (!finite) obs_.fill(0.f);  // never expose a non-finite observation
+      action_.fill(0.f);
+      e = QuestSimEvent::RejectedAction;
+      ++rejected_actions_;
+    }
+    // tau = 200 N m * a on the non-root DoFs; the root is unactuated (no residual forces).
+    for (int k = 0; k < NJ; ++k) tau_(6 + k) = S(cfg_.torque_scale) * S(action_[k]);
+    sim_->torques() = tau_;
+    last_sim_status_ = dynamics::StepStatus::Ok;
+    for (int s = 0; s < cfg_.substeps; ++s) {
+      const dynamics::StepStatus st = sim_->step(h_);
+      if (st != dynamics::StepStatus::Ok) {
+        last_sim_status_ = st;
+        ++simulation_failures_;
+        standUnderHeadset(window_[0]);
+        return last_event_ = QuestSimEvent::SimulationFailure;
+      }
+    }
+    if (fallen()) {
+      ++falls_;
+      standUnderHeadset(window_[0]);
+      return last_event_ = QuestSimEvent::Fall;
+    }
+    ++steps_;
+    return last_event_ = e;
+  }
+
+  // Loss of balance: root below fall_height_ratio of its standing height, or tilted beyond fall_tilt.
+  bool fallen() const noexcept {
+    const auto& d = sim_->data();
+    return d.p[0].y() < S(cfg_.fall_height_ratio) * standing_root_y_ || d.R[0](1, 1) < S(std::cos(cfg_.fall_tilt));
+  }
+
+  // The character standing in its reference pose under the headset of `frame`, facing the
+  // headset's heading (OpenXR: the device looks along its -Z), at rest. Used at start and by resets.
+  void standUnderHeadset(const QuestSimSensorFrame<S>& frame) noexcept {
+    typename Sim::VecQ q = standing_q_;
+    const dynamics::Vec3<S> fwd = -frame[0].rotation.col(2);
+    const S theta = (std::abs(fwd.x()) + std::abs(fwd.z()) > S(1e-6)) ? std::atan2(fwd.x(), fwd.z()) : S(0);
+    q(0) = frame[0].position.x();
+    q(2) = frame[0].position.z();
+    q(3) = std::cos(theta / 2); q(4) = S(0); q(5) = std::sin(theta / 2); q(6) = S(0);  // R_y(theta)
+    sim_->setState(q, zero_v_);
+    tau_.setZero();
+    sim_->torques() = tau_;
+    policy_.reset();
+  }
+
+  // Access.
+  const Sim& simulator() const noexcept { return *sim_; }
+  Sim& simulator() noexcept { return *sim_; }   // e.g. to change contact parameters or the environment
+  // The policy input of the last step (zeros if it was rejected as non-finite).
+  const std::array<float, kObservationSize>& observation() const noexcept { return obs_; }
+  const std::array<float, NJ>& action() const noexcept { return action_; }  // policy output in [-1, 1]
+  const typename Sim::VecV& torques() const noexcept { return tau_; }       // applied (N m), root entries 0
+  const Window& window() const noexcept { return window_; }
+  const Builder& observationBuilder() const noexcept { return obs_builder_; }
+  const nn::Network<Net>& policy() const noexcept { return policy_; }
+  bool started() const noexcept { return started_; }
+  double trackedTime() const noexcept { return times_[0]; }   // user time the character tracks
+  double newestTime() const noexcept { return times_[NF]; }
+  QuestSimEvent lastEvent() const noexcept { return last_event_; }
+  dynamics::StepStatus lastSimStatus() const noexcept { return last_sim_status_; }
+  long long steps() const noexcept { return steps_; }
+  long long falls() const noexcept { return falls_; }
+  long long simulationFailures() const noexcept { return simulation_failures_; }
+  long long trackerResets() const noexcept { return tracker_resets_; }
+  long long rejectedActions() const noexcept { return rejected_actions_; }
+  const QuestSimConfig& config() const noexcept { return cfg_; }
+
+ private:
+  static Model scaledAvatar(double h, const QuestSimConfig& cfg, character::AvatarOptions o) {
+    if (!(std::isfinite(h) && h > 0)) throw std::invalid_argument("QuestSimController: user height must be > 0");
+    Model m = character::avatarForUserHeight<S, MB, MD>(h, o);
+    for (int i = 1; i < m.nb; ++i) m.bodies[i].damping = S(cfg.joint_damping);
+    m.finalize();
+    return m;
+  }
+
+  QuestSimConfig cfg_;
+  S height_;
+  S h_ = S(1.0 / 72);
+  std::unique_ptr<Sim> sim_;
+  Builder obs_builder_;
+  nn::Network<Net> policy_;
+  trackers::Resampler resampler_;
+  trackers::TrackerSanitizer sanitizer_;
+  Window window_{};
+  std::array<double, NF + 1> times_{};
+  alignas(64) std::array<float, kObservationSize> obs_{};
+  std::array<float, NJ> action_{};
+  typename Sim::VecQ standing_q_;
+  typename Sim::VecV zero_v_, tau_;
+  S standing_root_y_ = S(1);
+  bool started_ = false;
+  QuestSimEvent last_event_ = QuestSimEvent::Waiting;
+  dynamics::StepStatus last_sim_status_ = dynamics::StepStatus::Ok;
+  long long steps_ = 0, falls_ = 0, simulation_failures_ = 0, tracker_resets_ = 0, rejected_actions_ = 0;
+};
+
+}  // namespace sparsebody::control

@@ -1,0 +1,159 @@
+// Observation and policy against the PyTorch reference (weights_tool/questsim), run at test time:
+// this test simulates a double-precision avatar (1.62 m) under random torques, writes the model
+// JSON and a few states (q, v, contact forces, a random sensor window, the height) to case.json,
+// runs `python3 -m weights_tool.questsim reference` (an independent torch forward kinematics from
+// the model JSON), and compares the observation and the policy output (float <= 1e-4).
+#include <fstream>
+#include <random>
+
+#include <nlohmann/json.hpp>
+
+#include "questsim/common.hpp"
+#include "sparsebody/dynamics/model_json.hpp"
+
+using namespace sparsebody;
+using namespace sparsebody::control;
+using dynamics::Vec3;
+
+namespace {
+constexpr int NB = kDefaultAvatarBodies, NJ = kDefaultAvatarJointDofs, NF = 6;
+using L = QuestSimLayout<NB, NJ, NF>;
+using Model = dynamics::Model<double, 24, 72>;
+using Sim = dynamics::Simulator<double, 24, 72>;
+using Builder = QuestSimObservationBuilder<double, 24, 72>;
+using NetF = networks::QuestSimPolicyNet<float, L::size, NJ>;
+using NetH = networks::QuestSimPolicyNet<float, L::size, NJ, nn::f16>;
+
+struct Case {
+  std::array<double, L::size> obs64{};
+  std::array<float, L::size> obs32{};
+};
+
+nlohmann::json vec(const Eigen::Ref<const Eigen::VectorXd>& v) {
+  nlohmann::json a = nlohmann::json::array();
+  for (int i = 0; i < v.size(); ++i) a.push_back(v(i));
+  return a;
+}
+}  // namespace
+
+TEST_CASE("QuestSim parity: observation and policy against PyTorch (weights_tool/questsim)") {
+  const double height = 1.62;
+  Model m = character::avatarForUserHeight<double>(height);
+  for (int i = 1; i < m.nb; ++i) m.bodies[i].damping = 0.1;
+  m.finalize();
+  Sim sim(m);
+  sim.mode = dynamics::ControlMode::Torque;
+  const Builder builder(m);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> n;
+  std::uniform_real_distribution<double> u(-1, 1);
+
+  nlohmann::json cj;
+  cj["model"] = nlohmann::json::parse(dynamics::modelToJson(m));
+  cj["future"] = NF;
+  cj["states"] = nlohmann::json::array();
+  std::vector<Case> cases;
+  // Start bent, moving, slightly above the floor; random torques; a state every 7 substeps.
+  auto q = sim.q();
+  auto v = sim.v();
+  q(1) += 0.01;
+  for (int k = 0; k < m.nv; ++k) v(k) = 0.3 * n(rng);
+  q(3) = std::cos(0.35); q(5) = std::sin(0.35);  // yawed root
+  sim.setState(q, v);
+  int with_contacts = 0;
+  for (int c = 0; c < 8; ++c) {
+    for (int s = 0; s < 7; ++s) {
+      for (int k = 6; k < m.nv; ++k) sim.torques()(k) = 2 * u(rng);
+      REQUIRE(sim.step(1.0 / 72) == dynamics::StepStatus::Ok);
+    }
+    Builder::UserWindow user;
+    nlohmann::json uj = nlohmann::json::array();
+    for (auto& fr : user) {
+      nlohmann::json fj = nlohmann::json::array();
+      for (auto& d : fr) {
+        d.position = Vec3<double>(0.3 * n(rng), 1.5 + 0.1 * n(rng), 0.3 * n(rng));
+        const Eigen::Quaterniond r = dynamics::quatExp(Vec3<double>(n(rng), n(rng), n(rng)));
+        d.rotation = r.toRotationMatrix();
+        fj.push_back({d.position.x(), d.position.y(), d.position.z(), r.w(), r.x(), r.y(), r.z()});
+      }
+      uj.push_back(fj);
+    }
+    nlohmann::json contacts = nlohmann::json::array();
+    for (int k = 0; k < sim.numContacts(); ++k) {
+      const auto& ct = sim.contactAt(k);
+      if (ct.active) contacts.push_back({ct.body, ct.force.x(), ct.force.y(), ct.force.z()});
+    }
+    const auto ff = builder.footForces(sim);
+    with_contacts += (ff[0].norm() + ff[1].norm()) > 1.0;
+    cj["states"].push_back({{"q", vec(sim.q())}, {"v", vec(sim.v())}, {"contacts", contacts}, {"user", uj}, {"height", height}});
+    Case cs;
+    builder.build(sim, user, height, cs.obs64.data());
+    builder.build(sim, user, height, cs.obs32.data());
+    cases.push_back(cs);
+  }
+  CHECK(with_contacts >= 2);  // the foot-force block is exercised with non-zero values
+
+  const std::string dir = SPARSEBODY_QUESTSIM_WORK_DIR;
+  const std::string case_path = dir + "/parity_case.json", ref_path = dir + "/parity_reference.json";
+  std::ofstream(case_path) << cj.dump();
+  const std::string cmd = std::string("cd \"") + SPARSEBODY_SOURCE_DIR + "\" && \"" + SPARSEBODY_PYTHON_EXE +
+                          "\" -m weights_tool.questsim reference --case \"" + case_path + "\" --weights \"" +
+                          questsim_test::policyPath() + "\" --out \"" + ref_path + "\"";
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  nlohmann::json ref;
+  std::ifstream(ref_path) >> ref;
+  // The same observations through a policy with a full-gain output layer (outputs spread over
+  // [-1, 1] instead of the controller policy's +/-0.05): a policy-only check at full range.
+  const std::string policy_full = dir + "/questsim_policy_gain1.json", ref_full_path = dir + "/parity_reference_gain1.json";
+  const std::string cmd_full = std::string("cd \"") + SPARSEBODY_SOURCE_DIR + "\" && \"" + SPARSEBODY_PYTHON_EXE +
+                               "\" -m weights_tool.questsim reference --case \"" + case_path + "\" --weights \"" +
+                               policy_full + "\" --out \"" + ref_full_path + "\"";
+  REQUIRE(std::system(cmd_full.c_str()) == 0);
+  nlohmann::json ref_full;
+  std::ifstream(ref_full_path) >> ref_full;
+  REQUIRE(ref["observations"].size() == cases.size());
+
+  auto wf = nn::NetworkWeights<NetF>::load(questsim_test::policyPath(), networks::kQuestSimPolicyKind);
+  auto wh = nn::NetworkWeights<NetH>::load(questsim_test::policyPath(), networks::kQuestSimPolicyKind);
+  auto wfull = nn::NetworkWeights<NetF>::load(policy_full, networks::kQuestSimPolicyKind);
+  nn::Network<NetF> pf(wf), pfull(wfull);
+  nn::Network<NetH> ph(wh);
+  double e_obs64 = 0, e_obs32 = 0, e_pol = 0, e_chain = 0, e_f16 = 0, max_abs_obs = 0, e_full = 0, max_abs_full = 0;
+  for (std::size_t c = 0; c < cases.size(); ++c) {
+    const auto& ro = ref["observations"][c];
+    REQUIRE(ro.size() == std::size_t(L::size));
+    std::array<float, L::size> torch_obs32{};
+    for (int i = 0; i < L::size; ++i) {
+      const double r = ro[i].get<double>();
+      max_abs_obs = std::max(max_abs_obs, std::abs(r));
+      e_obs64 = std::max(e_obs64, std::abs(cases[c].obs64[i] - r));
+      e_obs32 = std::max(e_obs32, std::abs(double(cases[c].obs32[i]) - r));
+      torch_obs32[i] = float(r);
+    }
+    const auto& a32 = ref["actions32"][c];
+    const auto& a64 = ref["actions64"][c];
+    const float* y = pf.step(torch_obs32.data());  // policy alone, same input as torch float32
+    for (int k = 0; k < NJ; ++k) e_pol = std::max(e_pol, std::abs(double(y[k]) - a32[k].get<double>()));
+    y = pf.step(cases[c].obs32.data());             // whole chain: C++ observation -> C++ policy
+    for (int k = 0; k < NJ; ++k) e_chain = std::max(e_chain, std::abs(double(y[k]) - a64[k].get<double>()));
+    y = pfull.step(torch_obs32.data());
+    for (int k = 0; k < NJ; ++k) {
+      const double r = ref_full["actions32"][c][k].get<double>();
+      e_full = std::max(e_full, std::abs(double(y[k]) - r));
+      max_abs_full = std::max(max_abs_full, std::abs(r));
+    }
+    y = ph.step(cases[c].obs32.data());
+    for (int k = 0; k < NJ; ++k) e_f16 = std::max(e_f16, std::abs(double(y[k]) - a64[k].get<double>()));
+  }
+  MESSAGE("max |obs| " << max_abs_obs << "; observation double err " << e_obs64 << ", float err " << e_obs32
+                       << "; policy float err " << e_pol << "; obs+policy float err " << e_chain
+                       << "; obs+policy f16-weights err " << e_f16 << "; full-gain policy err " << e_full
+                       << " (max |a| " << max_abs_full << ")");
+  CHECK(e_obs64 < 1e-9);
+  CHECK(e_obs32 < 1e-4);
+  CHECK(e_pol < 1e-4);
+  CHECK(e_chain < 1e-4);
+  CHECK(e_full < 1e-4);
+  CHECK(max_abs_full > 0.5);
+  CHECK(e_f16 < 2e-2);  // weights rounded to 11 significant bits: looser by construction
+}

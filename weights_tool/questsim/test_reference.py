@@ -1,0 +1,88 @@
+"""pytest for the QuestSim reference (run by CTest as questsim_pytest, from the repository root)."""
+import math
+
+import numpy as np
+import torch
+
+from weights_tool.questsim import layout, observation, policy
+
+
+def test_layout_paper_numbers():
+    # §3.3: 16 links, 33 DoF -> o_sim in R^312; §3.5: 6 frames -> 162; plus the height.
+    L = layout.layout(16, 33, 5)
+    assert L["user"] == 312
+    assert L["height"] - L["user"] == 162
+    assert L["size"] == 475
+    assert layout.size(21, 48, 6) == 607  # default avatar, current + 6 future frames
+
+
+def _chain():
+    return {"bodies": [
+        {"name": "Hips", "parent": None, "joint": "free", "pos": [0, 1, 0]},
+        {"name": "Leg", "parent": "Hips", "joint": "revolute", "axis": [1, 0, 0], "pos": [0, -0.5, 0]},
+        {"name": "Foot_L", "parent": "Leg", "joint": "spherical", "pos": [0, -0.4, 0]},
+        {"name": "Foot_R", "parent": "Hips", "joint": "spherical", "pos": [0.1, -0.9, 0]},
+    ]}
+
+
+def test_fk_revolute_chain_analytic():
+    # Root at (1, 1, 2) turned 90 deg about Y; knee bent by a: foot = root + R (0, -0.5 - 0.4 cos a, -0.4 sin a)... in
+    # the root frame the knee axis is x, so the shank rotates in the y-z plane.
+    a = 0.7
+    c, s = math.cos(math.pi / 4), math.sin(math.pi / 4)
+    q = [1, 1, 2, c, 0, s, 0, a, 1, 0, 0, 0, 1, 0, 0, 0]
+    v = [0.0] * 6 + [2.0] + [0.0] * 6
+    R, p, w, vl = observation.forward_kinematics(_chain(), torch.tensor(q, dtype=torch.float64),
+                                                 torch.tensor(v, dtype=torch.float64))
+    Ry = torch.tensor([[0, 0, 1], [0, 1, 0], [-1, 0, 0]], dtype=torch.float64)
+    local = torch.tensor([0, -0.5 - 0.4 * math.cos(a), -0.4 * math.sin(a)], dtype=torch.float64)
+    assert torch.allclose(p[2], torch.tensor([1.0, 1.0, 2.0], dtype=torch.float64) + Ry @ local, atol=1e-12)
+    # Knee rate 2 rad/s about the root's x axis (world: Ry e_x = -z); the foot origin moves at w x r.
+    assert torch.allclose(w[2], Ry @ torch.tensor([2.0, 0, 0], dtype=torch.float64), atol=1e-12)
+    assert torch.allclose(vl[2], torch.linalg.cross(w[1], p[2] - p[1]), atol=1e-12)
+
+
+def test_observation_heading_invariance():
+    rng = np.random.default_rng(0)
+    model = _chain()
+    q = np.array([0.3, 0.9, -0.2, 1, 0, 0, 0, 0.4, 1, 0, 0, 0, 1, 0, 0, 0], dtype=np.float64)
+    r = rng.normal(size=4); r /= np.linalg.norm(r)
+    q[3:7] = r
+    v = rng.normal(size=13)
+    user = [[list(rng.normal(size=3)) + list(x / np.linalg.norm(x)) for x in rng.normal(size=(3, 4))]
+            for _ in range(7)]
+    contacts = [[2, 10.0, 300.0, -5.0], [3, -3.0, 200.0, 1.0]]
+    o1 = observation.observation(model, q, v, contacts, user, 1.7)
+    # Rotate and shift the whole scene about Y.
+    psi, t = 1.1, np.array([2.0, 0.0, -1.0])
+    G = np.array([[math.cos(psi), 0, math.sin(psi)], [0, 1, 0], [-math.sin(psi), 0, math.cos(psi)]])
+    gq = np.array([math.cos(psi / 2), 0, math.sin(psi / 2), 0])
+
+    def qmul(a, b):
+        w1, x1, y1, z1 = a
+        w2, x2, y2, z2 = b
+        return np.array([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                         w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2])
+
+    q2 = q.copy()
+    q2[0:3] = G @ q[0:3] + t
+    q2[3:7] = qmul(gq, q[3:7])
+    user2 = [[list(G @ np.array(e[0:3]) + t) + list(qmul(gq, np.array(e[3:7]))) for e in fr] for fr in user]
+    contacts2 = [[c[0], *(G @ np.array(c[1:4]))] for c in contacts]
+    o2 = observation.observation(model, q2, v, contacts2, user2, 1.7)
+    assert torch.allclose(o1, o2, atol=1e-10)
+    L = layout.layout(4, 7, 6)
+    assert o1.shape[0] == L["size"]
+    assert float(o1[L["height"]]) == 1.7
+
+
+def test_policy_file_roundtrip(tmp_path):
+    path = tmp_path / "p.json"
+    policy.write_policy(str(path), 4, 7, 6, seed=3, output_gain=1.0)
+    model, norm = policy.load_policy(str(path))
+    x = np.linspace(-1, 1, layout.size(4, 7, 6))
+    y64 = policy.run_policy(model, norm, x, torch.float64)
+    y32 = policy.run_policy(model, norm, x, torch.float32)
+    assert y64.shape == (7,)
+    assert np.max(np.abs(y64)) <= 1.0
+    assert np.max(np.abs(y64 - y32)) < 1e-5
