@@ -3,9 +3,10 @@
 //   BM_N3PPredictorStep     one Eq. (2) step: 3 tracker transforms, 3 networks, heading update, pose
 //   BM_N3PPredictorHmdOnly  the same with both controllers from o* (§8.2)
 //   BM_N3PPredictorStepF16  one step with the weights stored as float16 (half the bytes to read)
+//   BM_N3PPredictorStepQ8   one step with int8 weights (nn/int8.hpp: a quarter of the bytes)
 //   BM_N3PNet/{0,1,2}       G_sig, G_lo, G_up alone (one network step each)
 //   BM_N3PPipelineFrame     a whole 30 Hz frame of the direct-mode pipeline (resampling, checks,
-//                           calibration, predictor, foot pinning and arm IK)
+//                           calibration, predictor, foot pinning and arm IK); F16 and Q8 variants
 // Input: a synthetic user walking a circle and waving (no data files needed besides the weights).
 #include <benchmark/benchmark.h>
 
@@ -83,6 +84,9 @@ void BM_N3PPredictorHmdOnly(benchmark::State& s) { predictor<Pipeline>(s, true);
 void BM_N3PPredictorStepF16(benchmark::State& s) {
   predictor<avatar::N3PPipeline<float, 64, 128, 128, nn::f16>>(s, false);
 }
+void BM_N3PPredictorStepQ8(benchmark::State& s) {
+  predictor<avatar::N3PPipeline<float, 64, 128, 128, nn::q8>>(s, false);
+}
 
 template <class Net, class WPtr>
 void net_step(benchmark::State& state, const WPtr& w) {
@@ -104,13 +108,14 @@ void BM_N3PNet(benchmark::State& state) {
                           static_cast<int64_t>(state.range(0) == 0 ? w->sig->bytes() : state.range(0) == 1 ? w->lo->bytes() : w->up->bytes()));
 }
 
-void BM_N3PPipelineFrame(benchmark::State& state) {
-  const auto* w = weights<Pipeline>();
+template <class P>
+void pipeline_frame(benchmark::State& state) {
+  const auto* w = weights<P>();
   if (!w) {
     state.SkipWithError("default weights not found");
     return;
   }
-  Pipeline p(*w);
+  P p(*w);
   int t = 0;
   for (auto _ : state) {
     benchmark::DoNotOptimize(p.push(frame(t++)));
@@ -118,11 +123,17 @@ void BM_N3PPipelineFrame(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations());
 }
+void BM_N3PPipelineFrame(benchmark::State& s) { pipeline_frame<Pipeline>(s); }
+void BM_N3PPipelineFrameF16(benchmark::State& s) { pipeline_frame<avatar::N3PPipeline<float, 64, 128, 128, nn::f16>>(s); }
+void BM_N3PPipelineFrameQ8(benchmark::State& s) { pipeline_frame<avatar::N3PPipeline<float, 64, 128, 128, nn::q8>>(s); }
 }  // namespace
 
 BENCHMARK(BM_N3PPredictorStep);
 BENCHMARK(BM_N3PPredictorHmdOnly);
 BENCHMARK(BM_N3PPredictorStepF16);
+BENCHMARK(BM_N3PPredictorStepQ8);
 BENCHMARK(BM_N3PNet)->Arg(0)->Arg(1)->Arg(2);
 BENCHMARK(BM_N3PPipelineFrame);
+BENCHMARK(BM_N3PPipelineFrameF16);
+BENCHMARK(BM_N3PPipelineFrameQ8);
 BENCHMARK_MAIN();

@@ -3,7 +3,9 @@
 // prints MPJPE full / upper / lower (cm), and foot skating (cm/s, toes, ground-truth contact
 // frames), for 3-point and HMD-only input. The input file is made of the data: keep it outside the
 // repository.
-//   eval_direct FILE.json [WEIGHTS_PREFIX]
+//   eval_direct FILE.json [WEIGHTS_PREFIX] [--storage float|f16|q8]
+// --storage picks the weight storage of the networks (float; nn/half.hpp f16; nn/int8.hpp q8), to
+// measure what the smaller storage costs in accuracy.
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -14,16 +16,9 @@
 #include "sparsebody/avatar/n3p_direct.hpp"
 
 using namespace sparsebody;
-using Pipeline = avatar::N3PPipeline<float, 64, 128, 128>;
 
-int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: eval_direct FILE.json [WEIGHTS_PREFIX]\n");
-    return 2;
-  }
-  const std::string prefix = argc > 2 ? argv[2] : std::string(SPARSEBODY_SOURCE_DIR) + "/examples/weights/n3p";
-  std::ifstream in(argv[1]);
-  const auto d = nlohmann::json::parse(in);
+template <class Pipeline>
+int evaluate(const nlohmann::json& d, const std::string& prefix, const char* storage) {
   const auto w = Pipeline::load(prefix);
   const std::vector<int> upper = d["upper"], lower = d["lower"], toes = d["toes"];
   for (int hmd = 0; hmd < 2; ++hmd) {
@@ -73,9 +68,29 @@ int main(int argc, char** argv) {
         }
       }
     }
-    std::printf("direct mode %-8s (%zu clips): MPJPE %.2f cm (upper %.2f, lower %.2f), foot skating %.2f cm/s\n",
-                hmd ? "HMD-only" : "3-point", d["clips"].size(), 100 * e / n, 100 * eu / n, 100 * el / n,
+    std::printf("direct mode %-8s %-5s weights (%zu clips): MPJPE %.2f cm (upper %.2f, lower %.2f), foot skating %.2f cm/s\n",
+                hmd ? "HMD-only" : "3-point", storage, d["clips"].size(), 100 * e / n, 100 * eu / n, 100 * el / n,
                 100 * skate / std::max(1L, ns));
   }
   return 0;
+}
+
+int main(int argc, char** argv) {
+  std::string file, prefix = std::string(SPARSEBODY_SOURCE_DIR) + "/examples/weights/n3p", storage = "float";
+  int positional = 0;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--storage" && i + 1 < argc) storage = argv[++i];
+    else if (positional++ == 0) file = a;
+    else prefix = a;
+  }
+  if (file.empty() || (storage != "float" && storage != "f16" && storage != "q8")) {
+    std::fprintf(stderr, "usage: eval_direct FILE.json [WEIGHTS_PREFIX] [--storage float|f16|q8]\n");
+    return 2;
+  }
+  std::ifstream in(file);
+  const auto d = nlohmann::json::parse(in);
+  if (storage == "f16") return evaluate<avatar::N3PPipeline<float, 64, 128, 128, nn::f16>>(d, prefix, "f16");
+  if (storage == "q8") return evaluate<avatar::N3PPipeline<float, 64, 128, 128, nn::q8>>(d, prefix, "q8");
+  return evaluate<avatar::N3PPipeline<float, 64, 128, 128>>(d, prefix, "float");
 }

@@ -31,3 +31,24 @@ TEST_CASE("n3p pipeline: no allocation per frame") {
   CHECK(n == 0);
   CHECK(p.has_output());
 }
+
+TEST_CASE("n3p pipeline with int8 weights (nn/int8.hpp): no allocation per frame, finite output") {
+  using Q8Pipeline = avatar::N3PPipeline<float, 16, 24, 24, nn::q8>;
+  const auto g = n3p_test::read_json(n3p_test::golden_dir() + "/n3p_small.golden.json");
+  Q8Pipeline p(Q8Pipeline::load(n3p_test::small_prefix()));
+  std::vector<trackers::TrackerFrame> frames;
+  for (int t = 0; t < g["frames"].get<int>(); ++t) frames.push_back(n3p_test::golden_frame(g, t));
+  frames[20].pose[1].position.y = std::numeric_limits<float>::quiet_NaN();
+  for (int t = 0; t < 3; ++t) p.push(frames[t]);
+  long long n = 0;
+  {
+    sparsebody_test::AllocationCounter counter;
+    for (std::size_t t = 3; t < frames.size(); ++t) {
+      p.push(frames[t]);
+      for (const auto& x : p.world().position) REQUIRE(x.allFinite());
+    }
+    n = counter.count();
+  }
+  CHECK(n == 0);
+  CHECK(p.has_output());
+}

@@ -53,6 +53,11 @@ TEST_CASE("zero allocations: LoBSTr with float16 weight storage") {
   check_no_alloc(sparsebody::nn::NetworkWeights<sparsebody::networks::LoBSTrNet<float, 40, 24, 37, sparsebody::nn::f16>>::load(
       kDir + "/lobstr_small.weights.json", "lobstr"));
 }
+TEST_CASE("zero allocations: LoBSTr and the QuestSim policy with int8 weight storage") {
+  check_no_alloc(sparsebody::nn::NetworkWeights<sparsebody::networks::LoBSTrNet<float, 40, 24, 37, sparsebody::nn::q8>>::load(
+      kDir + "/lobstr_small.weights.json", "lobstr"));
+  check_no_alloc(weights_from_table<sparsebody::networks::LoBSTrNet<float, 1024, 128, 37, sparsebody::nn::q8>>(random_lobstr_table(1024, 128, 1), "lobstr"), 100);
+}
 TEST_CASE("zero allocations: paper-size LoBSTr 37->1024") {
   check_no_alloc(weights_from_table<LoBSTr1024<float>>(random_lobstr_table(1024, 128, 1), "lobstr"), 100);
 }
