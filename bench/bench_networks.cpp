@@ -45,6 +45,16 @@ using N3PPolicyF16 = networks::N3PPolicyNet<float, 868, 72, 256, nn::f16>;
 using QuestSimF16 = networks::QuestSimPolicyNet<float, 475, 33, nn::f16>;
 template <int H>
 using LoBSTrF16Small = networks::LoBSTrNet<float, H, kLatent, 37, nn::f16>;
+// int8 weight storage (nn/int8.hpp): a quarter of the float bytes, dynamic input quantization.
+template <int H>
+using GruOnlyQ8 = nn::Named<kGru, nn::GRU<float, 37, H, 1, nn::q8>>;
+template <int H>
+using LoBSTrQ8 = networks::LoBSTrNet<float, H, kLatent, 37, nn::q8>;
+using GsigQ8 = networks::N3PPredictorNet<float, 45, 64, 12, 3, nn::q8>;
+using GloQ8 = networks::N3PPredictorNet<float, 12, 128, 113, 3, nn::q8>;
+using GupQ8 = networks::N3PPredictorNet<float, 45, 128, 201, 3, nn::q8>;
+using N3PPolicyQ8 = networks::N3PPolicyNet<float, 868, 72, 256, nn::q8>;
+using QuestSimQ8 = networks::QuestSimPolicyNet<float, 475, 33, nn::q8>;
 
 io::TensorTable lobstr_table(int H, int latent, bool gru_only = false) {
   return sparsebody_test::random_lobstr_table(H, latent, 1, gru_only);
@@ -175,6 +185,15 @@ void register_all() {
   SB_NET("LoBSTr_H256_f16weights", LoBSTrF16Small<256>, lobstr_table(256, kLatent), "lobstr")
   SB_NET("N3P_policy_868_256_256_72_f16weights", N3PPolicyF16, mlp_table({868, 256, 256, 72}), "n3p_policy")
   SB_NET("QuestSim_475_400_300_200_33_f16weights", QuestSimF16, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
+  SB_NET("GRU_37x1024_q8weights", GruOnlyQ8<1024>, lobstr_table(1024, 0, true), "gru")
+  SB_NET("GRU_37x256_q8weights", GruOnlyQ8<256>, lobstr_table(256, 0, true), "gru")
+  SB_NET("LoBSTr_H1024_q8weights", LoBSTrQ8<1024>, lobstr_table(1024, kLatent), "lobstr")
+  SB_NET("LoBSTr_H256_q8weights", LoBSTrQ8<256>, lobstr_table(256, kLatent), "lobstr")
+  SB_NET("N3P_Gsig_H64_q8weights", GsigQ8, n3p_table(45, 64, 12), "n3p_signal")
+  SB_NET("N3P_Glo_H128_q8weights", GloQ8, n3p_table(12, 128, 113), "n3p_lower")
+  SB_NET("N3P_Gup_H128_q8weights", GupQ8, n3p_table(45, 128, 201), "n3p_upper")
+  SB_NET("N3P_policy_868_256_256_72_q8weights", N3PPolicyQ8, mlp_table({868, 256, 256, 72}), "n3p_policy")
+  SB_NET("QuestSim_475_400_300_200_33_q8weights", QuestSimQ8, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
 #undef SB_NET
   add_ratio("GRU_37x1024 f16 weights / plain read of its float weights", "sparsebody/GRU_37x1024_f16weights",
             "read/" + std::to_string(entries[0].weight_bytes) + "B/" + std::to_string(entries[0].weight_bytes));
@@ -203,8 +222,11 @@ void register_all() {
     add_ratio(std::string(n) + " f16 weights sparsebody / LibTorch float", std::string("sparsebody/") + n + "_f16weights",
               std::string("libtorch/") + n);
   for (const char* n : {"LoBSTr_H1024", "LoBSTr_H256", "N3P_Gsig_H64", "N3P_Glo_H128", "N3P_Gup_H128",
-                        "N3P_policy_868_256_256_72", "QuestSim_475_400_300_200_33"})
+                        "N3P_policy_868_256_256_72", "QuestSim_475_400_300_200_33"}) {
     add_ratio(std::string(n) + " sparsebody / LibTorch", std::string("sparsebody/") + n, std::string("libtorch/") + n);
+    add_ratio(std::string(n) + " q8 weights sparsebody / LibTorch float", std::string("sparsebody/") + n + "_q8weights",
+              std::string("libtorch/") + n);
+  }
 #endif
   benchmark::RegisterBenchmark("load/LoBSTr_H1024_json_list", BM_LoadLoBSTr1024)->Arg(0)->Unit(benchmark::kMillisecond)->Iterations(3);
   benchmark::RegisterBenchmark("load/LoBSTr_H1024_json_base64", BM_LoadLoBSTr1024)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(5);
