@@ -61,6 +61,12 @@ TEST_CASE("QuestSim: avatar scaled to the user's height from the headset (length
     CHECK(c.observation()[Ctl::Layout::height] == doctest::Approx(uh));
   }
   CHECK_THROWS_AS(CtlD(questsim_test::policyWeights<CtlD>(), std::nan("")), std::invalid_argument);
+  // From a standing frame directly.
+  auto made = Ctl::fromStandingFrame(questsim_test::policyWeights<Ctl>(), f);
+  REQUIRE(made != nullptr);
+  CHECK(made->userHeight() == doctest::Approx(1.84).epsilon(1e-6));
+  CHECK(made->simulator().model().totalMass() == doctest::Approx(63.0 * std::pow(1.84 / 1.75, 3)).epsilon(1e-5));
+  CHECK(Ctl::fromStandingFrame(questsim_test::policyWeights<Ctl>(), bad) == nullptr);
 }
 
 TEST_CASE("QuestSim: 36 Hz control, 2 substeps, and the latency of the 6 future frames") {

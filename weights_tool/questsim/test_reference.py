@@ -26,8 +26,8 @@ def _chain():
 
 
 def test_fk_revolute_chain_analytic():
-    # Root at (1, 1, 2) turned 90 deg about Y; knee bent by a: foot = root + R (0, -0.5 - 0.4 cos a, -0.4 sin a)... in
-    # the root frame the knee axis is x, so the shank rotates in the y-z plane.
+    # Root at (1, 1, 2) turned 90 deg about Y, knee (axis x) bent by a: in the root frame the foot is at
+    # (0, -0.5 - 0.4 cos a, -0.4 sin a).
     a = 0.7
     c, s = math.cos(math.pi / 4), math.sin(math.pi / 4)
     q = [1, 1, 2, c, 0, s, 0, a, 1, 0, 0, 0, 1, 0, 0, 0]

@@ -44,10 +44,11 @@
 //
 // Use:
 //   auto w = control::QuestSimController<>::loadWeights("questsim_policy.json");   // kind "questsim_policy"
-//   const double h = control::userHeightFromHeadset(standing_frame);                // NaN if unusable
-//   control::QuestSimController<> c(w, h);
-//   for (frame : frames) c.push(frame);            // any rate; runs one control step per 36 Hz tick
-//   c.simulator().data().R[i], .p[i]               // the avatar's body poses (world = stage space)
+//   auto c = control::QuestSimController<>::fromStandingFrame(w, standing_frame);    // nullptr if no height
+//   // or: control::QuestSimController<> c(w, control::userHeightFromHeadset(standing_frame));
+//   for (frame : frames) c->push(frame);           // any rate; runs one control step per 36 Hz tick
+//   c->simulator().data().R[i], .p[i]              // the avatar's body poses (world = stage space)
+//   c->trackedTime()                               // the user time those poses correspond to
 #pragma once
 #include <array>
 #include <cmath>
@@ -131,6 +132,16 @@ class QuestSimController {
   QuestSimController(std::shared_ptr<const Weights> weights, double user_height, QuestSimConfig cfg = {},
                      character::AvatarOptions avatar = {})
       : QuestSimController(std::move(weights), scaledAvatar(user_height, cfg, avatar), user_height, cfg) {}
+
+  // The avatar for the user standing upright in `standing` (userHeightFromHeadset); nullptr when
+  // that frame gives no usable height (headset invalid, non-finite, or outside the height range).
+  static std::unique_ptr<QuestSimController> fromStandingFrame(std::shared_ptr<const Weights> weights,
+                                                               const trackers::TrackerFrame& standing,
+                                                               QuestSimConfig cfg = {}) {
+    const double h = userHeightFromHeadset(standing, cfg);
+    if (std::isnan(h)) return nullptr;
+    return std::make_unique<QuestSimController>(std::move(weights), h, cfg);
+  }
 
   // A custom model (already at the user's scale; its joint damping is used as given).
   QuestSimController(std::shared_ptr<const Weights> weights, const Model& model, double user_height, QuestSimConfig cfg)
