@@ -34,11 +34,14 @@ std::vector<trackers::TrackerFrame> clip_frames() {
   return out;
 }
 
-template <int H>
-std::shared_ptr<const typename avatar::LoBSTrPipeline<float, H, 128>::Weights> weights() {
-  using W = typename avatar::LoBSTrPipeline<float, H, 128>::Weights;
+template <int H, typename Wt = float>
+using Pipe = avatar::LoBSTrPipeline<float, H, 128, Wt>;
+
+template <int H, typename Wt = float>
+std::shared_ptr<const typename Pipe<H, Wt>::Weights> weights() {
+  using W = typename Pipe<H, Wt>::Weights;
   if constexpr (H == 256) {
-    return avatar::LoBSTrPipeline<float, H, 128>::load(SPARSEBODY_LOBSTR_WEIGHTS);
+    return Pipe<H, Wt>::load(SPARSEBODY_LOBSTR_WEIGHTS);
   } else {  // paper size: random tensors, the shipped file's metadata and input normalisation
     io::WeightsDocument doc = io::read_weights_file(SPARSEBODY_LOBSTR_WEIGHTS);
     doc.tensors = sparsebody_test::random_lobstr_table(H, 128, 11);
@@ -46,12 +49,12 @@ std::shared_ptr<const typename avatar::LoBSTrPipeline<float, H, 128>::Weights> w
   }
 }
 
-template <int H>
+template <int H, typename Wt = float>
 void BM_Pipeline(benchmark::State& st) {
   const bool window = st.range(0) != 0;
   avatar::LoBSTrConfig cfg;
   cfg.mode = window ? avatar::RunMode::Window : avatar::RunMode::Streaming;
-  avatar::LoBSTrPipeline<float, H, 128> p(weights<H>(), cfg);
+  Pipe<H, Wt> p(weights<H, Wt>(), cfg);
   const auto frames = clip_frames();
   std::size_t i = 0;
   double t = 0;
@@ -76,10 +79,10 @@ void BM_Pipeline(benchmark::State& st) {
 
 // The network step alone (same weights, the pipeline's features as input): the pipeline's own cost
 // is the difference, measured in the same run.
-template <int H>
+template <int H, typename Wt = float>
 void BM_NetworkOnly(benchmark::State& st) {
-  avatar::LoBSTrPipeline<float, H, 128> p(weights<H>());
-  nn::Network<typename avatar::LoBSTrPipeline<float, H, 128>::Net> net(weights<H>());
+  Pipe<H> p(weights<H>());
+  nn::Network<typename Pipe<H, Wt>::Net> net(weights<H, Wt>());
   const auto frames = clip_frames();
   std::vector<std::array<float, 37>> xs;
   for (std::size_t i = 0; i < frames.size(); ++i) {
@@ -106,6 +109,13 @@ BENCHMARK_TEMPLATE(BM_Pipeline, 256)->Name("lobstr/compact/streaming")->Arg(0)->
 BENCHMARK_TEMPLATE(BM_Pipeline, 256)->Name("lobstr/compact/window")->Arg(1)->Unit(benchmark::kMicrosecond);
 BENCHMARK_TEMPLATE(BM_Pipeline, 1024)->Name("lobstr/paper/streaming")->Arg(0)->Unit(benchmark::kMicrosecond);
 BENCHMARK_TEMPLATE(BM_Pipeline, 1024)->Name("lobstr/paper/window")->Arg(1)->Unit(benchmark::kMicrosecond)->Iterations(200);
+// Smaller weight storage (nn/half.hpp, nn/int8.hpp): same pipeline, f16 or int8 network weights.
+BENCHMARK_TEMPLATE(BM_NetworkOnly, 256, nn::q8)->Name("lobstr/compact/network_only_q8")->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_NetworkOnly, 1024, nn::q8)->Name("lobstr/paper/network_only_q8")->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Pipeline, 256, nn::f16)->Name("lobstr/compact/streaming_f16")->Arg(0)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Pipeline, 256, nn::q8)->Name("lobstr/compact/streaming_q8")->Arg(0)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Pipeline, 1024, nn::f16)->Name("lobstr/paper/streaming_f16")->Arg(0)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Pipeline, 1024, nn::q8)->Name("lobstr/paper/streaming_q8")->Arg(0)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

@@ -2,12 +2,15 @@
 //
 //   sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p] [--no-pelvis]
 //                   [--weights FILE|DIR] [--mode streaming|window] [--no-contact-ik]
-//                   [--trackers-out trackers.csv] [--calibration-frame N] [--quiet]
+//                   [--trackers-out trackers.csv] [--calibration-frame N] [--storage float|f16|q8] [--quiet]
 //
 // Model choice (--model auto, the default): LoBSTr when the input has a pelvis tracker (it needs
 // one), Neural3Points (direct mode) when it has only the headset and controllers, which is what
 // every headset has. The demo prints which model it picked and why. --no-pelvis drops the pelvis
 // tracker from the input (a BVH clip synthesises one from the hips) to see the 3-point model.
+// --storage picks how the network weights are held: float (default), f16 (half the bytes) or q8
+// (int8, a quarter; AVX-512 VNNI kernel, portable fallback elsewhere). See the README for speed and
+// accuracy of each.
 //
 // BVH input: the skeleton is mapped by joint names (pose/joint_map.hpp) and scaled by leg length to
 // the standard skeleton; headset, controllers and pelvis tracker are synthesised from the head,
@@ -41,6 +44,7 @@ struct Options {
   Model model = Model::Auto;
   avatar::RunMode mode = avatar::RunMode::Streaming;
   bool contact_ik = true, quiet = false, no_pelvis = false;
+  std::string storage = "float";
   int calibration_frame = 0;
 };
 
@@ -49,7 +53,7 @@ struct Options {
                "%s\nusage: sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p] [--no-pelvis]\n"
                "                       [--weights FILE (LoBSTr) | DIR (Neural3Points: n3p_{signal,lower,upper}.json)]\n"
                "                       [--mode streaming|window] [--no-contact-ik] [--trackers-out trackers.csv]\n"
-               "                       [--calibration-frame N] [--quiet]\n",
+               "                       [--calibration-frame N] [--storage float|f16|q8] [--quiet]\n",
                msg);
   std::exit(2);
 }
@@ -68,6 +72,10 @@ Options parse(int argc, char** argv) {
       else if (m == "n3p" || m == "neural3points") o.model = Model::N3P;
       else usage("--model must be auto, lobstr or n3p");
     } else if (a == "--no-pelvis") o.no_pelvis = true;
+    else if (a == "--storage") {
+      o.storage = next();
+      if (o.storage != "float" && o.storage != "f16" && o.storage != "q8") usage("--storage must be float, f16 or q8");
+    }
     else if (a == "--mode") {
       const std::string m = next();
       if (m == "streaming") o.mode = avatar::RunMode::Streaming;
@@ -159,8 +167,8 @@ void read_input(const Options& o, Input& in) {
 
 // What differs between the pipelines, as overloads; everything else (push, has_output, pose,
 // world, skeleton, joint_map, contact, user_scale, meta().frame_rate) has the same shape.
-template <int H, int L>
-void set_scale(avatar::LoBSTrPipeline<float, H, L>& p, double s) {
+template <int H, int L, typename W>
+void set_scale(avatar::LoBSTrPipeline<float, H, L, W>& p, double s) {
   features::Calibration c;
   c.scale = s;
   p.set_calibration(c);
@@ -171,15 +179,16 @@ void set_scale(avatar::N3PPipeline<T, A, B, C, W>& p, double s) {
   c.base.scale = s;
   p.set_calibration(c);
 }
-template <int H, int L>
-void describe(const avatar::LoBSTrPipeline<float, H, L>& p, const Options& o) {
-  std::printf("model   LoBSTr %s: H=%d latent=%d, %s mode%s, %.0f fps\n", o.weights.c_str(), H, L,
+template <int H, int L, typename W>
+void describe(const avatar::LoBSTrPipeline<float, H, L, W>& p, const Options& o) {
+  std::printf("model   LoBSTr %s: H=%d latent=%d, %s weights, %s mode%s, %.0f fps\n", o.weights.c_str(), H, L, o.storage.c_str(),
               o.mode == avatar::RunMode::Streaming ? "streaming" : ("window (" + std::to_string(p.window()) + " frames)").c_str(),
               o.contact_ik ? ", contact IK" : "", p.meta().frame_rate);
 }
 template <typename T, int A, int B, int C, typename W>
 void describe(const avatar::N3PPipeline<T, A, B, C, W>& p, const Options& o) {
-  std::printf("model   Neural3Points direct mode %s: G_sig/G_lo/G_up hidden %d/%d/%d, %s, %.0f fps\n", o.weights.c_str(), A, B, C,
+  std::printf("model   Neural3Points direct mode %s: G_sig/G_lo/G_up hidden %d/%d/%d, %s weights, %s, %.0f fps\n",
+              o.weights.c_str(), A, B, C, o.storage.c_str(),
               o.contact_ik ? "foot-contact and hand IK" : "no IK", p.meta().frame_rate);
 }
 
@@ -310,9 +319,9 @@ int run(const Options& o, Pipeline& pipe, Input& in, const std::string& credit) 
   return 0;
 }
 
-template <int Hidden, int Latent>
+template <int Hidden, int Latent, typename W = float>
 int run_lobstr(const Options& o, Input& in) {
-  using Pipeline = avatar::LoBSTrPipeline<float, Hidden, Latent>;
+  using Pipeline = avatar::LoBSTrPipeline<float, Hidden, Latent, W>;
   const auto w = Pipeline::load(o.weights);
   avatar::LoBSTrConfig cfg;
   cfg.mode = o.mode;
@@ -321,8 +330,9 @@ int run_lobstr(const Options& o, Input& in) {
   return run(o, pipe, in, w->info().credit);
 }
 
+template <typename W = float>
 int run_n3p(const Options& o, Input& in) {
-  using Pipeline = avatar::N3PPipeline<float, 64, 128, 128>;  // the paper's sizes (the shipped weights)
+  using Pipeline = avatar::N3PPipeline<float, 64, 128, 128, W>;  // the paper's sizes (the shipped weights)
   if (o.mode != avatar::RunMode::Streaming) std::printf("note    --mode window is LoBSTr-only; Neural3Points always streams\n");
   const auto w = Pipeline::load(o.weights);
   avatar::N3PConfig cfg;
@@ -350,6 +360,8 @@ int main(int argc, char** argv) {
     }
     if (model == Model::N3P) {
       if (o.weights.empty()) o.weights = SPARSEBODY_DEFAULT_N3P_WEIGHTS;
+      if (o.storage == "f16") return run_n3p<nn::f16>(o, in);
+      if (o.storage == "q8") return run_n3p<nn::q8>(o, in);
       return run_n3p(o, in);
     }
     if (o.weights.empty()) o.weights = SPARSEBODY_DEFAULT_WEIGHTS;
@@ -357,10 +369,13 @@ int main(int argc, char** argv) {
     if (!probe) usage(("cannot open weights " + o.weights).c_str());
     const auto doc = nlohmann::json::parse(probe);
     const int hidden = doc.at("meta").value("hidden", 256), latent = doc.at("meta").value("latent", 128);
-    if (hidden == 256 && latent == 128) return run_lobstr<256, 128>(o, in);
-    if (hidden == 1024 && latent == 128) return run_lobstr<1024, 128>(o, in);
-    if (hidden == 32 && latent == 16) return run_lobstr<32, 16>(o, in);
-    std::fprintf(stderr, "%s: no build of this demo for H=%d latent=%d (compiled: 256/128, 1024/128, 32/16)\n", o.weights.c_str(), hidden, latent);
+    const bool f16 = o.storage == "f16", q8 = o.storage == "q8";
+    if (hidden == 256 && latent == 128)
+      return f16 ? run_lobstr<256, 128, nn::f16>(o, in) : q8 ? run_lobstr<256, 128, nn::q8>(o, in) : run_lobstr<256, 128>(o, in);
+    if (hidden == 1024 && latent == 128)
+      return f16 ? run_lobstr<1024, 128, nn::f16>(o, in) : q8 ? run_lobstr<1024, 128, nn::q8>(o, in) : run_lobstr<1024, 128>(o, in);
+    if (hidden == 32 && latent == 16 && !f16 && !q8) return run_lobstr<32, 16>(o, in);
+    std::fprintf(stderr, "%s: no build of this demo for H=%d latent=%d (compiled: 256/128 and 1024/128 in float/f16/q8, 32/16 in float)\n", o.weights.c_str(), hidden, latent);
     return 1;
   } catch (const LoadError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

@@ -76,10 +76,12 @@ struct LoBSTrMeta {
   }
 };
 
-template <typename T = float, int Hidden = 256, int Latent = 128>
+// W: the network's stored weight type: T, nn::f16 (half the bytes) or nn::q8 (int8, a quarter;
+// see nn/int8.hpp and the README for what each costs in accuracy).
+template <typename T = float, int Hidden = 256, int Latent = 128, typename W = T>
 class LoBSTrPipeline {
  public:
-  using Net = networks::LoBSTrNet<T, Hidden, Latent>;
+  using Net = networks::LoBSTrNet<T, Hidden, Latent, features::kLoBSTrFeatureCount, W>;
   using Weights = nn::NetworkWeights<Net>;
   static constexpr int kFeatures = features::kLoBSTrFeatureCount;
 
