@@ -1,5 +1,5 @@
 // QuestSim control step and its parts, on the default avatar scaled to 1.62 m:
-//   BM_QuestSimControlStep<float/f16 weights, float/double simulation>: observation + policy + torques
+//   BM_QuestSimControlStep<float/double simulation, float/f16/q8 policy weights>: observation + policy + torques
 //     + 2 substeps + fall check (QuestSimController::controlStep), the issue's <= 40 us target;
 //   BM_QuestSimTick: the same from a TrackerFrame (sanitiser + window shift added);
 //   BM_QuestSimObservation, BM_QuestSimPolicy<W>, BM_QuestSimSubstep: the parts.
@@ -166,12 +166,14 @@ void BM_QuestSimSubstep(benchmark::State& st) {
 
 BENCHMARK_TEMPLATE(BM_QuestSimControlStep, float, float);
 BENCHMARK_TEMPLATE(BM_QuestSimControlStep, float, nn::f16);
+BENCHMARK_TEMPLATE(BM_QuestSimControlStep, float, nn::q8);
 BENCHMARK_TEMPLATE(BM_QuestSimControlStep, double, float);
 BENCHMARK_TEMPLATE(BM_QuestSimTick, float, float);
 BENCHMARK_TEMPLATE(BM_QuestSimObservation, float);
 BENCHMARK_TEMPLATE(BM_QuestSimObservation, double);
 BENCHMARK_TEMPLATE(BM_QuestSimPolicy, float);
 BENCHMARK_TEMPLATE(BM_QuestSimPolicy, nn::f16);
+BENCHMARK_TEMPLATE(BM_QuestSimPolicy, nn::q8);
 BENCHMARK_TEMPLATE(BM_QuestSimSubstep, float)->Arg(30)->Arg(1);
 BENCHMARK_TEMPLATE(BM_QuestSimSubstep, double)->Arg(30)->Arg(1);
 BENCHMARK_MAIN();

@@ -33,8 +33,9 @@ static void checkNoAlloc() {
   CHECK(n == 0);
 }
 
-TEST_CASE("QuestSim control ticks do not allocate (float and double simulation, f16 policy)") {
+TEST_CASE("QuestSim control ticks do not allocate (float and double simulation, f16 and q8 policy)") {
   checkNoAlloc<QuestSimController<float>>();
   checkNoAlloc<QuestSimController<double>>();
   checkNoAlloc<QuestSimController<float, nn::f16>>();
+  checkNoAlloc<QuestSimController<float, nn::q8>>();
 }

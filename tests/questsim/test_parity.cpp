@@ -23,6 +23,7 @@ using Sim = dynamics::Simulator<double, 24, 72>;
 using Builder = QuestSimObservationBuilder<double, 24, 72>;
 using NetF = networks::QuestSimPolicyNet<float, L::size, NJ>;
 using NetH = networks::QuestSimPolicyNet<float, L::size, NJ, nn::f16>;
+using NetQ = networks::QuestSimPolicyNet<float, L::size, NJ, nn::q8>;
 
 struct Case {
   std::array<double, L::size> obs64{};
@@ -118,6 +119,9 @@ TEST_CASE("QuestSim parity: observation and policy against PyTorch (weights_tool
   auto wfull = nn::NetworkWeights<NetF>::load(policy_full, networks::kQuestSimPolicyKind);
   nn::Network<NetF> pf(wf), pfull(wfull);
   nn::Network<NetH> ph(wh);
+  auto wq = nn::NetworkWeights<NetQ>::load(policy_full, networks::kQuestSimPolicyKind);
+  nn::Network<NetQ> pq(wq);
+  double e_q8 = 0;
   double e_obs64 = 0, e_obs32 = 0, e_pol = 0, e_chain = 0, e_f16 = 0, max_abs_obs = 0, e_full = 0, max_abs_full = 0;
   for (std::size_t c = 0; c < cases.size(); ++c) {
     const auto& ro = ref["observations"][c];
@@ -142,13 +146,15 @@ TEST_CASE("QuestSim parity: observation and policy against PyTorch (weights_tool
       e_full = std::max(e_full, std::abs(double(y[k]) - r));
       max_abs_full = std::max(max_abs_full, std::abs(r));
     }
+    y = pq.step(torch_obs32.data());  // int8 weights, full-gain policy: approximate by construction
+    for (int k = 0; k < NJ; ++k) e_q8 = std::max(e_q8, std::abs(double(y[k]) - ref_full["actions64"][c][k].get<double>()));
     y = ph.step(cases[c].obs32.data());
     for (int k = 0; k < NJ; ++k) e_f16 = std::max(e_f16, std::abs(double(y[k]) - a64[k].get<double>()));
   }
   MESSAGE("max |obs| " << max_abs_obs << "; observation double err " << e_obs64 << ", float err " << e_obs32
                        << "; policy float err " << e_pol << "; obs+policy float err " << e_chain
                        << "; obs+policy f16-weights err " << e_f16 << "; full-gain policy err " << e_full
-                       << " (max |a| " << max_abs_full << ")");
+                       << " (max |a| " << max_abs_full << "); full-gain policy, q8 weights err " << e_q8);
   CHECK(e_obs64 < 1e-9);
   CHECK(e_obs32 < 1e-4);
   CHECK(e_pol < 1e-4);
@@ -156,4 +162,5 @@ TEST_CASE("QuestSim parity: observation and policy against PyTorch (weights_tool
   CHECK(e_full < 1e-4);
   CHECK(max_abs_full > 0.5);
   CHECK(e_f16 < 2e-2);  // weights rounded to 11 significant bits: looser by construction
+  CHECK(e_q8 < 0.1);    // 8-bit weights and inputs (nn/int8.hpp): an approximation (0.052 measured)
 }
