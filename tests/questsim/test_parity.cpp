@@ -28,6 +28,7 @@ using NetQ = networks::QuestSimPolicyNet<float, L::size, NJ, nn::q8>;
 struct Case {
   std::array<double, L::size> obs64{};
   std::array<float, L::size> obs32{};
+  std::array<float, L::size> obs_float_sim{};  // state, FK and observation in float
 };
 
 nlohmann::json vec(const Eigen::Ref<const Eigen::VectorXd>& v) {
@@ -90,6 +91,21 @@ TEST_CASE("QuestSim parity: observation and policy against PyTorch (weights_tool
     Case cs;
     builder.build(sim, user, height, cs.obs64.data());
     builder.build(sim, user, height, cs.obs32.data());
+    {  // The controller's float path: the same state computed entirely in float (FK included).
+      const auto mf = m.cast<float>();
+      dynamics::Data<float, 24, 72> df(mf);
+      const dynamics::Model<float, 24, 72>::VecQ qf = sim.q().cast<float>();
+      const dynamics::Model<float, 24, 72>::VecV vf = sim.v().cast<float>();
+      dynamics::forwardKinematics(mf, df, qf, &vf);
+      std::array<QuestSimSensorFrame<float>, NF + 1> uf;
+      for (int t = 0; t <= NF; ++t)
+        for (int d = 0; d < 3; ++d) {
+          uf[t][d].position = user[t][d].position.cast<float>();
+          uf[t][d].rotation = user[t][d].rotation.cast<float>();
+        }
+      const std::array<Vec3<float>, 2> fff{ff[0].cast<float>(), ff[1].cast<float>()};
+      buildQuestSimObservation<NB, NJ, NF>(mf, df, qf, vf, fff, uf, float(height), cs.obs_float_sim.data());
+    }
     cases.push_back(cs);
   }
   CHECK(with_contacts >= 2);  // the foot-force block is exercised with non-zero values
@@ -122,7 +138,7 @@ TEST_CASE("QuestSim parity: observation and policy against PyTorch (weights_tool
   auto wq = nn::NetworkWeights<NetQ>::load(policy_full, networks::kQuestSimPolicyKind);
   nn::Network<NetQ> pq(wq);
   double e_q8 = 0;
-  double e_obs64 = 0, e_obs32 = 0, e_pol = 0, e_chain = 0, e_f16 = 0, max_abs_obs = 0, e_full = 0, max_abs_full = 0;
+  double e_obs_fsim = 0, e_obs64 = 0, e_obs32 = 0, e_pol = 0, e_chain = 0, e_f16 = 0, max_abs_obs = 0, e_full = 0, max_abs_full = 0;
   for (std::size_t c = 0; c < cases.size(); ++c) {
     const auto& ro = ref["observations"][c];
     REQUIRE(ro.size() == std::size_t(L::size));
@@ -132,6 +148,7 @@ TEST_CASE("QuestSim parity: observation and policy against PyTorch (weights_tool
       max_abs_obs = std::max(max_abs_obs, std::abs(r));
       e_obs64 = std::max(e_obs64, std::abs(cases[c].obs64[i] - r));
       e_obs32 = std::max(e_obs32, std::abs(double(cases[c].obs32[i]) - r));
+      e_obs_fsim = std::max(e_obs_fsim, std::abs(double(cases[c].obs_float_sim[i]) - r) / std::max(1.0, std::abs(r)));
       torch_obs32[i] = float(r);
     }
     const auto& a32 = ref["actions32"][c];
@@ -152,11 +169,13 @@ TEST_CASE("QuestSim parity: observation and policy against PyTorch (weights_tool
     for (int k = 0; k < NJ; ++k) e_f16 = std::max(e_f16, std::abs(double(y[k]) - a64[k].get<double>()));
   }
   MESSAGE("max |obs| " << max_abs_obs << "; observation double err " << e_obs64 << ", float err " << e_obs32
+                       << ", all-float (FK in float) err relative to max(1, |ref|) " << e_obs_fsim
                        << "; policy float err " << e_pol << "; obs+policy float err " << e_chain
                        << "; obs+policy f16-weights err " << e_f16 << "; full-gain policy err " << e_full
                        << " (max |a| " << max_abs_full << "); full-gain policy, q8 weights err " << e_q8);
   CHECK(e_obs64 < 1e-9);
   CHECK(e_obs32 < 1e-4);
+  CHECK(e_obs_fsim < 1e-4);
   CHECK(e_pol < 1e-4);
   CHECK(e_chain < 1e-4);
   CHECK(e_full < 1e-4);
