@@ -36,10 +36,13 @@
 //   - a substep that fails (StepStatus != Ok: the simulator has already rolled the state back)
 //     -> SimulationFailure: the character is reset to standing under the headset of frame t;
 //   - a fall: root (Hips) height below fall_height_ratio x its standing height, or the root's up axis
-//     tilted beyond fall_tilt -> Fall: same reset. (QuestSim trains with early termination and does
-//     not describe a run-time recovery; this is ours.)
-// Nothing non-finite ever leaves a step: the state is the simulator's (which never stores a
-// non-finite number), torques are finite by construction. tick(), push() and controlStep() never
+//     tilted beyond fall_tilt -> Fall: same reset. (The paper describes no run-time recovery; this
+//     is ours.)
+// Nothing non-finite ever leaves a step: the state is the simulator's (its step never stores a
+// non-finite number, and a state corrupted from outside is reset as above), torques are finite by
+// construction, and a rejected observation is zeroed.
+// Templates: S = simulation scalar (float or double); W = policy weight storage: float, nn::f16
+// (half the bytes) or nn::q8 (int8, approximate: nn/int8.hpp); the policy computes in float. tick(), push() and controlStep() never
 // allocate, throw or lock; the constructor allocates everything once.
 //
 // Use:
