@@ -165,6 +165,8 @@ class N3PPipeline {
       present[k] = cfg_.use_controllers && controller(f, k, s.pose[0].position, c);
       if (present[k]) o[k] = calib_.apply(k, c);
     }
+    trackers_ = o;
+    present_ = present;
     if (!pred_.step(o, present)) return;
     pose_ = pred_.pose();  // same size: no allocation
     pose::forward_kinematics(pred_.skeleton(), pose_, world_);
@@ -209,6 +211,10 @@ class N3PPipeline {
   // Controllers replaced by o* in the last frame (0: 3-point, 1: one controller, 2: HMD only).
   int predicted_controllers() const noexcept { return pred_.substituted(1) + pred_.substituted(2); }
   long long frames() const noexcept { return frames_; }
+  // The calibrated trackers of the last usable frame (joint poses, standard-skeleton scale) and which
+  // were measured (the others are stale); read by the physics mode's combined control predictor.
+  const features::n3p::TrackerSet& trackers() const noexcept { return trackers_; }
+  const std::array<bool, 3>& trackers_present() const noexcept { return present_; }
   const N3PConfig& config() const noexcept { return cfg_; }
 
  private:
@@ -279,6 +285,8 @@ class N3PPipeline {
   pose::BodyPose pose_, last_pose_;
   pose::WorldPose world_, last_world_;
   FootPin lock_[2];
+  features::n3p::TrackerSet trackers_{};
+  std::array<bool, 3> present_{};
   int arm_[2][3] = {}, leg_[2][3] = {};
   double reach_[2] = {};
   long long frames_ = 0;

@@ -203,6 +203,30 @@ class N3PPredictor {
     return true;
   }
 
+  // Everything a step reads and writes (heading, g_lo, g_up, o*, z, GRU hidden states), so a caller
+  // can run the predictor ahead from a saved state and come back (the combined control predictor,
+  // §6: nine frames rolled out from the simulated character's state). Fixed size: no allocation.
+  struct Snapshot {
+    typename nn::Network<SigNet>::State sig;
+    typename nn::Network<LoNet>::State lo;
+    typename nn::Network<UpNet>::State up;
+    features::HeadingFrame h;
+    bool started = false;
+    T glo[n3p::kGlo]{}, gup[n3p::kGup]{}, ostar[n3p::kO]{}, z[n3p::kZ]{}, zstar[n3p::kZ]{};
+  };
+  void save(Snapshot& s) const noexcept {
+    s.sig = sig_.state(); s.lo = lo_.state(); s.up = up_.state();
+    s.h = h_; s.started = started_;
+    std::copy(glo_, glo_ + n3p::kGlo, s.glo); std::copy(gup_, gup_ + n3p::kGup, s.gup);
+    std::copy(ostar_, ostar_ + n3p::kO, s.ostar); std::copy(z_, z_ + n3p::kZ, s.z); std::copy(zstar_, zstar_ + n3p::kZ, s.zstar);
+  }
+  void restore(const Snapshot& s) noexcept {
+    sig_.state() = s.sig; lo_.state() = s.lo; up_.state() = s.up;
+    h_ = s.h; started_ = s.started;
+    std::copy(s.glo, s.glo + n3p::kGlo, glo_); std::copy(s.gup, s.gup + n3p::kGup, gup_);
+    std::copy(s.ostar, s.ostar + n3p::kO, ostar_); std::copy(s.z, s.z + n3p::kZ, z_); std::copy(s.zstar, s.zstar + n3p::kZ, zstar_);
+  }
+
   // --- results (valid after a successful step) ----------------------------------------------
   const pose::BodyPose& pose() const noexcept { return pose_; }          // standard skeleton, metres
   const Eigen::Matrix3d& world_rotation(int joint) const noexcept { return R_[joint]; }

@@ -1,0 +1,190 @@
+// Neural3Points physics mode (default model-based controller) next to direct mode, on validation
+// clips dumped by `python3 -m weights_tool.n3p evaluate WEIGHTS VAL.npz --dump-direct FILE.json`
+// (the same file as tests/n3p/eval_direct.cpp; it is made of the data: keep it outside the repo).
+// Prints, per mode (3-point input):
+//   MPJPE full / upper / lower (cm, global joint positions, standard skeleton);
+//   foot skating (cm/s): horizontal toe speed on the frames the ground truth marks as contact;
+//   ground penetration (mm): mean over frames of max(0, h_rest - y) of the foot and toe joints,
+//     h_rest = the joint's height in the skeleton's standing pose (so a foot flat on the floor
+//     scores 0 in both modes), and the worst frame;
+//   physics only: residual root force / torque (mean and max over all 120 Hz steps), falls,
+//     failed steps, and the simulated body's own deepest point below the floor (mm).
+// Physics mode is 0.1 s behind its input; by default its output is compared with the ground truth
+// of the frame it reproduces (output_frame(), the paper's "shift forward by 0.1 s", §8.4-8.5);
+// --no-shift compares with the current frame instead.
+//   n3p_physics_eval FILE.json [--clips N] [--every K] [--no-shift] [--weights PREFIX]
+//     [--root-kp X] [--root-kd X] [--root-kr X] [--root-dr X] [--max-force N] [--max-torque NM]
+//     [--feedforward SCALE] [--correction-kp X] [--target-lead FRAMES] [--hold-targets 0|1]
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "sparsebody/avatar/n3p_physics.hpp"
+
+using namespace sparsebody;
+using Physics = avatar::N3PPhysicsPipeline<float, 64, 128, 128>;
+using Direct = Physics::Direct;
+
+namespace {
+struct Metrics {
+  double e = 0, eu = 0, el = 0, skate = 0, pen = 0, pen_max = 0;
+  long n = 0, ns = 0;
+  void print(const char* name) const {
+    std::printf("%-8s MPJPE %6.2f cm (upper %5.2f, lower %5.2f) | foot skating %6.2f cm/s | penetration mean %5.2f mm, max %5.1f mm | %ld frames\n",
+                name, 100 * e / std::max(1L, n), 100 * eu / std::max(1L, n), 100 * el / std::max(1L, n),
+                100 * skate / std::max(1L, ns), 1000 * pen / std::max(1L, n), 1000 * pen_max, n);
+  }
+};
+
+trackers::TrackerFrame frame_of(const nlohmann::json& c, int t) {
+  trackers::TrackerFrame f;
+  f.time = t / 30.0;
+  for (int k = 0; k < 3; ++k) {
+    const auto& p3 = c["p"][t];
+    const auto& q = c["q6"][t];
+    Eigen::Matrix3d R;
+    R.col(2) = Eigen::Vector3d(q[6 * k], q[6 * k + 1], q[6 * k + 2]).normalized();
+    R.col(0) = Eigen::Vector3d(q[6 * k + 3], q[6 * k + 4], q[6 * k + 5]).cross(R.col(2)).normalized();
+    R.col(1) = R.col(2).cross(R.col(0));
+    f.pose[k].position = trackers::to_xr(Eigen::Vector3d(p3[3 * k], p3[3 * k + 1], p3[3 * k + 2]));
+    f.pose[k].orientation = trackers::to_xr(Eigen::Quaterniond(R));
+    f.valid[k] = true;
+  }
+  return f;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: n3p_physics_eval FILE.json [--clips N] [--every K] [--no-shift] [--weights PREFIX]\n");
+    return 2;
+  }
+  std::string prefix = SPARSEBODY_N3P_WEIGHTS;
+  int max_clips = 1 << 30, every = 1;
+  bool shift = true;
+  avatar::N3PPhysicsConfig cfg;
+  for (int i = 2; i < argc; ++i) {
+    auto num = [&](const char* flag, double& x) {
+      if (std::strcmp(argv[i], flag) || i + 1 >= argc) return false;
+      x = std::atof(argv[++i]);
+      return true;
+    };
+    auto& cc = cfg.controller;
+    double lead = cfg.target_lead, hold = 0;
+    if (num("--root-kp", cc.root_kp) || num("--root-kd", cc.root_kd) || num("--root-kr", cc.root_kr) ||
+        num("--root-dr", cc.root_dr) || num("--max-force", cc.max_force) || num("--max-torque", cc.max_torque) ||
+        num("--feedforward", cc.feedforward_scale) || num("--correction-kp", cfg.correction.kp))
+      continue;
+    double sup = 1;
+    if (num("--stance-support", sup)) { cc.stance_support = sup != 0; continue; }
+    if (num("--target-lead", lead)) { cfg.target_lead = static_cast<int>(lead); continue; }
+    if (num("--hold-targets", hold)) { cfg.per_frame_targets = hold == 0; continue; }
+    if (!std::strcmp(argv[i], "--clips") && i + 1 < argc) max_clips = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--every") && i + 1 < argc) every = std::max(1, std::atoi(argv[++i]));
+    else if (!std::strcmp(argv[i], "--no-shift")) shift = false;
+    else if (!std::strcmp(argv[i], "--weights") && i + 1 < argc) prefix = argv[++i];
+  }
+  std::ifstream in(argv[1]);
+  if (!in) {
+    std::fprintf(stderr, "cannot open %s\n", argv[1]);
+    return 2;
+  }
+  const auto d = nlohmann::json::parse(in);
+  const auto w = Physics::load(prefix);
+  const std::vector<int> upper = d["upper"], lower = d["lower"], toes = d["toes"];
+  Physics phys(w, cfg);
+  const pose::Skeleton& s = phys.skeleton();
+  // Standing heights of the foot and toe joints (skeleton rest offsets under the standing root).
+  const int feet[4] = {s.find("Foot_L"), s.find("Foot_R"), toes[0], toes[1]};
+  double rest_h[4];
+  {
+    const auto R = control::N3PSimRetarget<double, 24, 72>::neutral_rotations(phys.meta());
+    pose::BodyPose p;
+    p.resize(s.size());
+    for (int j = 0; j < s.size(); ++j) {
+      const int par = s.parents[j];
+      p.local[j] = Eigen::Quaterniond(par < 0 ? R[j] : Eigen::Matrix3d(R[par].transpose() * R[j]));
+    }
+    p.root_position = Eigen::Vector3d(0, phys.meta().glo0[1], 0);
+    pose::WorldPose wp;
+    wp.resize(s.size());
+    pose::forward_kinematics(s, p, wp);
+    const double floor = std::min({wp.position[feet[0]].y(), wp.position[feet[1]].y(), wp.position[feet[2]].y(), wp.position[feet[3]].y()});
+    for (int k = 0; k < 4; ++k) rest_h[k] = wp.position[feet[k]].y() - std::min(floor, 0.0);
+  }
+  Metrics md, mp;
+  double sim_pen = 0, sim_pen_max = 0;
+  long sim_n = 0, falls = 0, failures = 0, clips = 0;
+  avatar::ResidualStats rs;
+  int idx = -1;
+  for (const auto& c : d["clips"]) {
+    if (++idx % every != 0) continue;
+    if (clips >= max_clips) break;
+    ++clips;
+    Physics p(w, cfg);
+    const int F = static_cast<int>(c["p"].size());
+    Eigen::Vector3d prev[2][2];
+    long long prev_frame[2] = {-10, -10};
+    auto score = [&](Metrics& m, const pose::WorldPose& wp, int t, int mode) {
+      const auto& J = c["joints"][t];
+      auto err = [&](int j) { return (wp.position[j] - Eigen::Vector3d(J[3 * j], J[3 * j + 1], J[3 * j + 2])).norm(); };
+      double a = 0, u = 0, l = 0;
+      for (int j = 0; j < s.size(); ++j) a += err(j);
+      for (int j : upper) u += err(j);
+      for (int j : lower) l += err(j);
+      m.e += a / s.size();
+      m.eu += u / upper.size();
+      m.el += l / lower.size();
+      double pen = 0;
+      for (int k = 0; k < 4; ++k) pen = std::max(pen, rest_h[k] - wp.position[feet[k]].y());
+      m.pen += pen;
+      m.pen_max = std::max(m.pen_max, pen);
+      ++m.n;
+      for (int sd = 0; sd < 2; ++sd) {
+        const Eigen::Vector3d x = wp.position[toes[sd]];
+        if (prev_frame[mode] == t - 1 && c["contacts"][t][sd].get<int>() != 0) {
+          m.skate += std::hypot(x.x() - prev[mode][sd].x(), x.z() - prev[mode][sd].z()) * 30.0;
+          ++m.ns;
+        }
+        prev[mode][sd] = x;
+      }
+      prev_frame[mode] = t;
+    };
+    for (int t = 0; t < F; ++t) {
+      p.push(frame_of(c, t));
+      if (p.direct().has_output()) score(md, p.direct().world(), t, 0);
+      if (!p.has_output()) continue;
+      // The frame the physics output reproduces (its restarts counted from its own start).
+      const int tg = shift ? t - static_cast<int>(std::min<long long>(t, Physics::kDelayFrames)) : t;
+      if (shift && t < Physics::kDelayFrames) continue;
+      score(mp, p.world(), tg, 1);
+      const double pen = p.penetration();
+      sim_pen += pen;
+      sim_pen_max = std::max(sim_pen_max, pen);
+      ++sim_n;
+    }
+    const auto& r = p.residual_stats();
+    rs.force_sum += r.force_sum;
+    rs.torque_sum += r.torque_sum;
+    rs.force_max = std::max(rs.force_max, r.force_max);
+    rs.torque_max = std::max(rs.torque_max, r.torque_max);
+    rs.steps += r.steps;
+    falls += p.falls();
+    failures += p.sim_failures();
+  }
+  std::printf("Neural3Points, %ld validation clips (every %d-th), 3-point input, physics output %s\n", clips, every,
+              shift ? "shifted by its 0.1 s delay" : "not shifted");
+  md.print("direct");
+  mp.print("physics");
+  std::printf("physics: residual root force mean %.1f N, max %.1f N; torque mean %.1f N m, max %.1f N m (%lld steps); "
+              "falls %ld, failed steps %ld; simulated body below floor mean %.2f mm, max %.1f mm\n",
+              rs.force_mean(), rs.force_max, rs.torque_mean(), rs.torque_max, rs.steps, falls, failures,
+              1000 * sim_pen / std::max(1L, sim_n), 1000 * sim_pen_max);
+  return 0;
+}

@@ -1,0 +1,329 @@
+// The Neural3Points pipeline in normal (physics) mode (Ye et al., SCA 2022, §3, §5-§7, §9): the
+// direct-mode pipeline (avatar/n3p_direct.hpp) predicts the user's pose every 30 Hz frame; a
+// simulated avatar (character/avatar.hpp: 1.75 m, 63 kg, PD servos kp = 200, kd = 20 on every
+// joint, implicit damping) tracks it at 120 Hz (4 substeps per frame):
+//
+//   TrackerFrame -> Resampler (30 Hz) -> N3PPipeline::step (sanitizer, calibration, predictor, IK)
+//     -> reference q_ref(N) (control/n3p_sim_retarget.hpp)
+//     -> every 3 frames (10 Hz, §6): a control step sets the PD targets, held until the next one:
+//          ControllerKind::ModelBased (default, no RL): targets = q_ref of the newest frame, plus
+//            per frame inverse-dynamics feed-forward and a bounded residual root wrench
+//            (control/model_based_controller.hpp; its magnitude is reported every step);
+//          ControllerKind::Policy: the combined control predictor + learned policy pi
+//            (control/n3p_control_predictor.hpp), when policy weights are given.
+//     -> per substep: controller torques + tracker position correction (§6.2, Eq. (19),
+//        control/tracker_correction.hpp) -> Simulator::step(1/120)
+//     -> once per frame: fall detection (§9, control/fall_detector.hpp) -> reset to the reference
+//     -> output: the simulated pose mapped back onto the standard skeleton.
+//
+// Delay (explicit, §3 / §8.4): the control step at frame t (after the trackers of frame t arrived)
+// finds the simulated character at frame t - 3 and gives it the targets of frame t; the character
+// reaches them over the next 12 substeps. So the pose output after frame N is the user's pose of
+// frame N - 3: kDelayFrames = 3 frames = 0.1 s behind the input. output_frame() / output_time()
+// say which input frame (and time stamp) the current pose reproduces; evaluation compares it with
+// that frame's ground truth, which is the paper's "shift the generated motion forward by 0.1 s"
+// (`shift_for_evaluation` in examples/n3p_physics_eval.cpp).
+//
+// Bad input and failures (defined recovery, tested):
+//   - tracker problems (NaN, lost headset or controllers, jumps) are handled by the direct
+//     pipeline (held pose / o* substitution / predictor restart); a reference root that jumps by
+//     more than `max_reference_jump` in one frame, or a resampler gap, restarts the physics: the
+//     character is placed on the next reference pose with its velocity;
+//   - a simulation step that fails (non-finite, velocity limit: dynamics::StepStatus) is rolled
+//     back by the simulator; the character is then reset to the reference pose;
+//   - a fall (FallDetector) resets the character to the reference pose and the simulation resumes;
+//   - the output is always finite: a pose that would not be keeps the last one.
+// Per frame: no allocation, no exception, no lock (tests/n3p_physics/test_alloc.cpp).
+#pragma once
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <memory>
+
+#include "sparsebody/avatar/n3p_direct.hpp"
+#include "sparsebody/character/avatar.hpp"
+#include "sparsebody/control/fall_detector.hpp"
+#include "sparsebody/control/model_based_controller.hpp"
+#include "sparsebody/control/n3p_sim_retarget.hpp"
+#include "sparsebody/control/tracker_correction.hpp"
+#include "sparsebody/dynamics/simulator.hpp"
+
+namespace sparsebody::avatar {
+
+enum class ControllerKind : unsigned char { ModelBased, Policy };
+
+struct N3PPhysicsConfig {
+  N3PConfig direct{};                           // the reference: direct mode (foot pinning + arm IK)
+  character::AvatarOptions avatar{};            // 1.75 m, 63 kg, kp 200, kd 20 (paper §7)
+  control::ModelBasedControllerConfig controller{};
+  control::TrackerCorrectionConfig correction{};  // kp 1000, kd 10 (§6.2)
+  control::FallDetectorConfig fall{};
+  int substeps = 4;                  // simulation steps per 30 Hz frame (120 Hz)
+  // Model-based controller only: PD targets refreshed every frame to the reference `target_lead`
+  // frames ahead of the frame being tracked, instead of held for 3 frames (the policy's 10 Hz).
+  bool per_frame_targets = true;
+  int target_lead = 1;
+  double max_reference_jump = 0.5;   // m per frame of the reference root; more restarts the physics
+};
+
+// Running statistics of the residual root wrench over all simulation steps (N, N m).
+struct ResidualStats {
+  double force_sum = 0, torque_sum = 0, force_max = 0, torque_max = 0;
+  long long steps = 0;
+  double force_mean() const noexcept { return steps ? force_sum / steps : 0; }
+  double torque_mean() const noexcept { return steps ? torque_sum / steps : 0; }
+};
+
+template <typename T = float, int HSig = 64, int HLo = 128, int HUp = 128, typename S = float, int MB = 24, int MD = 72>
+class N3PPhysicsPipeline {
+ public:
+  using Direct = N3PPipeline<T, HSig, HLo, HUp>;
+  using Weights = typename Direct::Weights;
+  using ModelT = dynamics::Model<S, MB, MD>;
+  using VecQ = typename ModelT::VecQ;
+  using VecV = typename ModelT::VecV;
+  using Sim = dynamics::Simulator<S, MB, MD>;
+  static constexpr int kDelayFrames = 3;    // 0.1 s at 30 Hz (see the header comment)
+  static constexpr int kControlPeriod = 3;  // frames per control step (10 Hz)
+  static constexpr int kHistory = 8;        // reference frames kept (ring)
+
+  static Weights load(const std::string& path) { return Direct::load(path); }
+
+  // Model-based controller (default). Throws LoadError when the skeleton does not fit the avatar.
+  explicit N3PPhysicsPipeline(const Weights& w, N3PPhysicsConfig cfg = {})
+      : cfg_(cfg),
+        direct_(w, cfg.direct),
+        model_(character::defaultAvatar<S, MB, MD>(cfg.avatar)),
+        sim_(model_),
+        retarget_(control::N3PSimRetarget<S, MB, MD>::from_meta(model_, direct_.meta())),
+        controller_(model_, cfg.controller),
+        correction_(model_, cfg.correction),
+        fall_(cfg.fall),
+        resampler_(direct_.meta().frame_rate) {
+    for (auto& q : ref_) q = model_.neutralConfiguration();
+    q_tmp_ = model_.neutralConfiguration();
+    v_tmp_.setZero(model_.nv);
+    tau_.setZero(model_.nv);
+    pose_.resize(direct_.skeleton().size());
+    last_pose_ = pose_;
+    world_.resize(direct_.skeleton().size());
+    last_world_ = world_;
+    reset();
+  }
+
+  // --- calibration (§7), as direct mode -------------------------------------------------------
+  bool calibrate(const trackers::TrackerFrame& tpose) noexcept { return direct_.calibrate(tpose); }
+  void set_calibration(const features::n3p::N3PCalibration& c) noexcept { direct_.set_calibration(c); }
+
+  // --- running --------------------------------------------------------------------------------
+  int push(const trackers::TrackerFrame& f) noexcept {
+    return resampler_.push(f, [this](const trackers::TrackerFrame& tick, bool gap) { step(tick, gap); });
+  }
+
+  // One 30 Hz frame (the caller resampled): the direct step, 4 simulation steps, maybe a control step.
+  void step(const trackers::TrackerFrame& f, bool gap = false) noexcept {
+    direct_.step(f, gap);
+    if (gap) restart_ = true;
+    if (!direct_.has_output()) return;
+    // Reference of this frame.
+    retarget_.to_q(model_, direct_.pose(), q_tmp_);
+    if (started_ && (q_tmp_.template head<3>() - ref(newest_).template head<3>()).norm() > S(cfg_.max_reference_jump))
+      restart_ = true;
+    if (!started_ || restart_) {
+      start(q_tmp_, f.time);
+    } else {
+      ++newest_;
+      ref(newest_) = q_tmp_;
+      hand(newest_, f.time);
+    }
+    simulate_frame();
+    if ((newest_ - first_) % kControlPeriod == 0) control_step();
+    output();
+  }
+
+  void reset() noexcept {
+    direct_.reset();
+    resampler_.reset();
+    controller_.reset();
+    fall_.reset();
+    started_ = restart_ = false;
+    valid_output_ = false;
+    residual_ = {};
+    stats_ = {};
+    falls_ = sim_failures_ = restarts_ = 0;
+  }
+
+  // --- results --------------------------------------------------------------------------------
+  // The simulated pose on the standard skeleton (metres), kDelayFrames behind the input.
+  const pose::BodyPose& pose() const noexcept { return pose_; }
+  const pose::WorldPose& world() const noexcept { return world_; }
+  bool has_output() const noexcept { return valid_output_; }
+  // Input frame (counted from the last physics start) and time stamp the output reproduces.
+  long long output_frame() const noexcept { return sim_frame_; }
+  double output_time() const noexcept { return out_time_; }
+  static constexpr double delay_seconds() noexcept { return kDelayFrames / 30.0; }
+
+  // The reference configuration (retargeted prediction) the character tracks now (frame output_frame()).
+  const VecQ& reference() const noexcept { return ref_[slot(first_ + sim_frame_)]; }
+  const control::ResidualWrench& residual() const noexcept { return residual_; }  // last step
+  const ResidualStats& residual_stats() const noexcept { return stats_; }
+  void clear_residual_stats() noexcept { stats_ = {}; }
+  long long falls() const noexcept { return falls_; }            // fall resets
+  long long sim_failures() const noexcept { return sim_failures_; }  // rolled-back steps -> reset
+  long long restarts() const noexcept { return restarts_; }      // physics (re)starts
+
+  const Direct& direct() const noexcept { return direct_; }  // the reference (direct mode, no delay)
+  const Sim& simulator() const noexcept { return sim_; }
+  const ModelT& model() const noexcept { return model_; }
+  const control::N3PSimRetarget<S, MB, MD>& retarget() const noexcept { return retarget_; }
+  const pose::Skeleton& skeleton() const noexcept { return direct_.skeleton(); }
+  const N3PMeta& meta() const noexcept { return direct_.meta(); }
+  double user_scale() const noexcept { return direct_.user_scale(); }
+  const N3PPhysicsConfig& config() const noexcept { return cfg_; }
+
+  // Lowest point of the simulated body below the floor (m, >= 0): ground penetration.
+  double penetration() const noexcept {
+    double lo = 0;
+    const auto& d = sim_.data();
+    for (int k = 0; k < model_.num_points; ++k) {
+      const auto& c = model_.points[k];
+      lo = std::min(lo, double(dynamics::pointPosition(d, c.body, c.pos).y() - c.radius));
+    }
+    return -lo;
+  }
+
+ private:
+  static std::size_t slot(long long n) noexcept { return static_cast<std::size_t>(((n % kHistory) + kHistory) % kHistory); }
+  VecQ& ref(long long n) noexcept { return ref_[slot(n)]; }
+  // Reference of frame n, clamped to what exists since the last start.
+  const VecQ& ref_at(long long n) noexcept { return ref(std::clamp(n, first_, newest_)); }
+
+  void hand(long long n, double time) noexcept {
+    auto& h = hands_[slot(n)];
+    for (int s = 0; s < 2; ++s) {
+      h.present[s] = direct_.trackers_present()[1 + s];
+      h.p[s] = retarget_.to_sim_point(direct_.trackers()[1 + s].p).template cast<S>();
+    }
+    h.time = time;
+    h.contact[0] = direct_.contact_probability(0);
+    h.contact[1] = direct_.contact_probability(1);
+  }
+
+  void start(const VecQ& q, double time) noexcept {
+    first_ = newest_ = started_ ? newest_ + 1 : 0;
+    ref(newest_) = q;
+    hand(newest_, time);
+    v_tmp_.setZero();
+    sim_.setState(q, v_tmp_);
+    sim_.targets() = q;
+    controller_.reset();
+    fall_.reset();
+    started_ = true;
+    restart_ = false;
+    ++restarts_;
+  }
+
+  // Puts the character on the reference of frame n with the reference velocity.
+  void reset_character(long long n) noexcept {
+    control::N3PSimRetarget<S, MB, MD>::velocity(model_, ref_at(n - 1), ref_at(n), S(1.0 / 30), v_tmp_);
+    if (!v_tmp_.allFinite()) v_tmp_.setZero();
+    sim_.setState(ref_at(n), v_tmp_);
+    controller_.reset();
+    fall_.reset();
+  }
+
+  void simulate_frame() noexcept {
+    const long long F = std::max(first_, newest_ - kDelayFrames);  // the frame the character reaches now
+    sim_frame_ = F - first_;
+    const S dt = S(1.0 / 30), h = dt / S(cfg_.substeps);
+    const auto& hd = hands_[slot(F)];
+    controller_.set_reference(model_, ref_at(F - 2), ref_at(F - 1), ref_at(F), dt, hd.contact);
+    if (cfg_.per_frame_targets) sim_.targets() = ref_at(F + cfg_.target_lead);
+    out_time_ = hd.time;
+    const bool policy = false;
+    for (int k = 0; k < cfg_.substeps; ++k) {
+      const S alpha = S(k + 1) / S(cfg_.substeps);
+      if (policy) {
+        tau_.setZero();
+        residual_ = {};
+      } else {
+        residual_ = controller_.apply(model_, sim_.data(), alpha, tau_);
+      }
+      correction_.apply(model_, sim_.data(), hd.p, hd.present, tau_);
+      sim_.torques() = tau_;
+      if (sim_.step(h) != dynamics::StepStatus::Ok) {
+        ++sim_failures_;
+        reset_character(F);
+        break;
+      }
+      stats_.force_sum += residual_.force;
+      stats_.torque_sum += residual_.torque;
+      stats_.force_max = std::max(stats_.force_max, residual_.force);
+      stats_.torque_max = std::max(stats_.torque_max, residual_.torque);
+      ++stats_.steps;
+    }
+    // §9: loss of balance -> reset to the predicted pose, resume.
+    const auto& d = sim_.data();
+    const int r = retarget_.body_of(0);
+    const VecQ& qr = ref_at(F);
+    const Eigen::Quaterniond Rr(double(qr(3)), double(qr(4)), double(qr(5)), double(qr(6)));
+    if (fall_.update(d.p[r].template cast<double>(), d.R[r].col(1).template cast<double>(),
+                     Eigen::Vector3d(double(qr(0)), double(qr(1)), double(qr(2))),
+                     Rr.normalized() * Eigen::Vector3d::UnitY()) != control::FallReason::None) {
+      ++falls_;
+      reset_character(F);
+    }
+  }
+
+  // 10 Hz: the targets held for the next kControlPeriod frames.
+  void control_step() noexcept {
+    sim_.targets() = ref(newest_);  // model-based: u = the newest predicted pose
+  }
+
+  void output() noexcept {
+    retarget_.to_pose(model_, sim_.q(), pose_);
+    pose::forward_kinematics(direct_.skeleton(), pose_, world_);
+    bool ok = pose_.root_position.allFinite();
+    for (std::size_t j = 0; j < pose_.local.size(); ++j) ok &= pose_.local[j].coeffs().allFinite() && world_.position[j].allFinite();
+    if (!ok) {
+      pose_ = last_pose_;
+      world_ = last_world_;
+      restart_ = true;
+      return;
+    }
+    last_pose_ = pose_;
+    last_world_ = world_;
+    valid_output_ = true;
+  }
+
+  struct Hands {
+    dynamics::Vec3<S> p[2] = {dynamics::Vec3<S>::Zero(), dynamics::Vec3<S>::Zero()};
+    bool present[2] = {false, false};
+    double time = 0;
+    double contact[2] = {1, 1};  // predicted c_L, c_R
+  };
+
+  N3PPhysicsConfig cfg_;
+  Direct direct_;
+  ModelT model_;
+  Sim sim_;
+  control::N3PSimRetarget<S, MB, MD> retarget_;
+  control::ModelBasedController<S, MB, MD> controller_;
+  control::TrackerCorrection<S, MB, MD> correction_;
+  control::FallDetector fall_;
+  trackers::Resampler resampler_;
+  std::array<VecQ, kHistory> ref_;
+  std::array<Hands, kHistory> hands_{};
+  VecQ q_tmp_;
+  VecV v_tmp_, tau_;
+  pose::BodyPose pose_, last_pose_;
+  pose::WorldPose world_, last_world_;
+  long long first_ = 0, newest_ = 0, sim_frame_ = 0;
+  double out_time_ = 0;
+  bool started_ = false, restart_ = false, valid_output_ = false;
+  control::ResidualWrench residual_;
+  ResidualStats stats_;
+  long long falls_ = 0, sim_failures_ = 0, restarts_ = 0;
+};
+
+}  // namespace sparsebody::avatar

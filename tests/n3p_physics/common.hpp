@@ -1,0 +1,40 @@
+// Shared helpers of the Neural3Points physics-mode tests: synthetic users (no data files needed
+// besides the default weights).
+#pragma once
+#include <cmath>
+#include <string>
+
+#include "sparsebody/avatar/n3p_physics.hpp"
+
+namespace n3p_physics_test {
+
+using Physics = sparsebody::avatar::N3PPhysicsPipeline<float, 64, 128, 128>;
+
+inline const Physics::Weights& weights() {
+  static const Physics::Weights w = Physics::load(SPARSEBODY_N3P_WEIGHTS);
+  return w;
+}
+
+// A user of the standard skeleton's size (head joint 1.378 m) at 30 Hz. speed 0: standing still, hands at the hips, a slight sway; speed > 0:
+// walking a circle of radius 1.5 m at `speed` m/s, facing along the path, hands swinging.
+inline sparsebody::trackers::TrackerFrame user_frame(int t, double speed) {
+  using namespace sparsebody;
+  const double T = t / 30.0, r = 1.5;
+  const double a = speed * T / r, s = std::sin(2 * M_PI * 0.9 * T);
+  trackers::TrackerFrame f;
+  f.time = T;
+  const Eigen::Vector3d c(r * std::sin(a), 0, r * std::cos(a));
+  const Eigen::Quaterniond yaw(Eigen::AngleAxisd(a + M_PI / 2, Eigen::Vector3d::UnitY()));
+  const double sway = speed > 0 ? 0.15 * s : 0.01 * s;
+  const Eigen::Vector3d pos[3] = {c + Eigen::Vector3d(0, 1.378 + 0.01 * s, 0),
+                                  c + yaw * Eigen::Vector3d(0.2, 0.8, sway),
+                                  c + yaw * Eigen::Vector3d(-0.2, 0.8, -sway)};
+  for (int k = 0; k < 3; ++k) {
+    f.pose[k].position = trackers::to_xr(pos[k]);
+    f.pose[k].orientation = trackers::to_xr(yaw);
+    f.valid[k] = true;
+  }
+  return f;
+}
+
+}  // namespace n3p_physics_test
