@@ -58,6 +58,7 @@ class Simulator {
   ContactParams<S> contact;
   Environment<S, MaxBoxes> env;
   bool contacts_enabled = true;
+  bool warm_start_contacts = true;  // sliding contacts start from last step's damper (fewer solver passes)
 
   explicit Simulator(const ModelT& model) : m_(model), d_(model) {
     q_ = m_.neutralConfiguration();
@@ -118,7 +119,12 @@ class Simulator {
     tau_ += tau_user_;
     const S hd = implicit_damping ? h : S(0);
     const bool with_kd = mode == ControlMode::PdTargets;
-    nc_ = contacts_enabled ? detectContacts(m_, d_, env, contact, contacts_, overflow_) : 0;
+    if (contacts_enabled) {
+      for (int k = 0; k < nc_; ++k) prev_contacts_[k] = contacts_[k];  // warm start (see detectContacts)
+      nc_ = detectContacts(m_, d_, env, contact, contacts_, overflow_, prev_contacts_.data(), warm_start_contacts ? nc_ : 0);
+    } else {
+      nc_ = 0;
+    }
     bool ok = true;
     passes_ = 0;
     if (nc_ == 0) {
@@ -157,7 +163,7 @@ class Simulator {
   Data<S, MB, MD> d_;
   VecQ q_, q_target_, q_prev_;
   VecV v_, v_target_, tau_user_, tau_, qdd_, v_prev_;
-  std::array<Contact<S>, MaxContacts> contacts_{};
+  std::array<Contact<S>, MaxContacts> contacts_{}, prev_contacts_{};
   int nc_ = 0, overflow_ = 0, passes_ = 0;
 };
 
