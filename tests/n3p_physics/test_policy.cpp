@@ -12,6 +12,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "support/alloc_counter.hpp"
+
+#include "sparsebody/avatar/n3p_physics.hpp"
 #include "sparsebody/control/n3p_policy_input.hpp"
 #include "sparsebody/networks/policy_nets.hpp"
 #include "sparsebody/nn/network.hpp"
@@ -81,4 +84,50 @@ TEST_CASE("n3p physics policy input and policy: C++ equals PyTorch (float <= 1e-
   MESSAGE("policy input max |diff| " << worst_s << ", policy output max |diff| " << worst_u << " (max |u| " << scale << ")");
   CHECK(worst_u <= 1e-4 * std::max(1.0, scale));
   CHECK(scale > 1e-3);  // a non-trivial output
+}
+
+// The physics pipeline driven by the combined control predictor and a (random, untrained) policy:
+// it must run, keep its output finite, count its control steps, recover from the falls an
+// untrained policy causes, and allocate nothing per frame.
+TEST_CASE("n3p physics policy path: runs, recovers from falls, no allocation per frame") {
+  using Physics = avatar::N3PPhysicsPipeline<float, 64, 128, 128>;
+  const std::string dir = std::string(SPARSEBODY_BINARY_DIR) + "/n3p_physics_reference";
+  std::ifstream probe(dir + "/n3p_policy_random.json");
+  REQUIRE_MESSAGE(probe.good(), "run the parity test case first (it writes the random policy)");
+  const auto w = Physics::load(SPARSEBODY_N3P_WEIGHTS);
+  Physics p(w, Physics::ControlPredictor::load_policy(dir + "/n3p_policy_random.json"));
+  CHECK(p.controller_kind() == avatar::ControllerKind::Policy);
+  auto frame = [](int t) {
+    trackers::TrackerFrame f;
+    f.time = t / 30.0;
+    const double a = 0.3 * t / 30.0;
+    const Eigen::Vector3d c(1.5 * std::sin(a), 0, 1.5 * std::cos(a));
+    const Eigen::Quaterniond yaw(Eigen::AngleAxisd(a + M_PI / 2, Eigen::Vector3d::UnitY()));
+    const Eigen::Vector3d pos[3] = {c + Eigen::Vector3d(0, 1.378, 0), c + yaw * Eigen::Vector3d(0.2, 0.8, 0), c + yaw * Eigen::Vector3d(-0.2, 0.8, 0)};
+    for (int k = 0; k < 3; ++k) {
+      f.pose[k].position = trackers::to_xr(pos[k]);
+      f.pose[k].orientation = trackers::to_xr(yaw);
+      f.valid[k] = true;
+    }
+    return f;
+  };
+  for (int t = 0; t < 10; ++t) p.push(frame(t));
+  long long allocations = 0;
+  {
+    sparsebody_test::AllocationCounter counter;
+    for (int t = 10; t < 160; ++t) p.push(frame(t));
+    allocations = counter.count();
+  }
+  CHECK(allocations == 0);
+  CHECK(p.has_output());
+  CHECK(p.policy_steps() >= 45);
+  CHECK(p.residual_stats().force_max == 0);  // no non-physical help on the policy path
+  bool finite = p.pose().root_position.allFinite();
+  for (const auto& q : p.pose().local) finite &= q.coeffs().allFinite();
+  CHECK(finite);
+  CHECK(p.simulator().data().p[0].y() > 0.0);
+  const auto& s = p.control_predictor()->policy_input();
+  bool s_finite = true;
+  for (float x : s) s_finite &= std::isfinite(x);
+  CHECK(s_finite);
 }

@@ -44,6 +44,7 @@
 #include "sparsebody/character/avatar.hpp"
 #include "sparsebody/control/fall_detector.hpp"
 #include "sparsebody/control/model_based_controller.hpp"
+#include "sparsebody/control/n3p_control_predictor.hpp"
 #include "sparsebody/control/n3p_sim_retarget.hpp"
 #include "sparsebody/control/tracker_correction.hpp"
 #include "sparsebody/dynamics/simulator.hpp"
@@ -83,6 +84,8 @@ class N3PPhysicsPipeline {
   using VecQ = typename ModelT::VecQ;
   using VecV = typename ModelT::VecV;
   using Sim = dynamics::Simulator<S, MB, MD>;
+  using ControlPredictor = control::N3PControlPredictor<T, HSig, HLo, HUp, S, MB, MD>;
+  using PolicyWeights = typename ControlPredictor::PolicyWeights;
   static constexpr int kDelayFrames = 3;    // 0.1 s at 30 Hz (see the header comment)
   static constexpr int kControlPeriod = 3;  // frames per control step (10 Hz)
   static constexpr int kHistory = 8;        // reference frames kept (ring)
@@ -90,7 +93,10 @@ class N3PPhysicsPipeline {
   static Weights load(const std::string& path) { return Direct::load(path); }
 
   // Model-based controller (default). Throws LoadError when the skeleton does not fit the avatar.
-  explicit N3PPhysicsPipeline(const Weights& w, N3PPhysicsConfig cfg = {})
+  explicit N3PPhysicsPipeline(const Weights& w, N3PPhysicsConfig cfg = {}) : N3PPhysicsPipeline(w, nullptr, cfg) {}
+  // ControllerKind::Policy when `policy` is given (ControlPredictor::load_policy(path)): the
+  // combined control predictor and pi set the targets; no feed-forward, no residual wrench.
+  N3PPhysicsPipeline(const Weights& w, std::shared_ptr<const PolicyWeights> policy, N3PPhysicsConfig cfg = {})
       : cfg_(cfg),
         direct_(w, cfg.direct),
         model_(character::defaultAvatar<S, MB, MD>(cfg.avatar)),
@@ -100,6 +106,7 @@ class N3PPhysicsPipeline {
         correction_(model_, cfg.correction),
         fall_(cfg.fall),
         resampler_(direct_.meta().frame_rate) {
+    if (policy) control_ = std::make_unique<ControlPredictor>(w, std::move(policy));
     for (auto& q : ref_) q = model_.neutralConfiguration();
     q_tmp_ = model_.neutralConfiguration();
     v_tmp_.setZero(model_.nv);
@@ -146,6 +153,7 @@ class N3PPhysicsPipeline {
     resampler_.reset();
     controller_.reset();
     fall_.reset();
+    if (control_) control_->reset();
     started_ = restart_ = false;
     valid_output_ = false;
     residual_ = {};
@@ -171,6 +179,9 @@ class N3PPhysicsPipeline {
   long long falls() const noexcept { return falls_; }            // fall resets
   long long sim_failures() const noexcept { return sim_failures_; }  // rolled-back steps -> reset
   long long restarts() const noexcept { return restarts_; }      // physics (re)starts
+  ControllerKind controller_kind() const noexcept { return control_ ? ControllerKind::Policy : ControllerKind::ModelBased; }
+  const ControlPredictor* control_predictor() const noexcept { return control_.get(); }
+  long long policy_steps() const noexcept { return policy_steps_; }  // control steps the policy set the targets
 
   const Direct& direct() const noexcept { return direct_; }  // the reference (direct mode, no delay)
   const Sim& simulator() const noexcept { return sim_; }
@@ -205,6 +216,8 @@ class N3PPhysicsPipeline {
       h.p[s] = retarget_.to_sim_point(direct_.trackers()[1 + s].p).template cast<S>();
     }
     h.time = time;
+    h.trackers = direct_.trackers();
+    h.present_all = direct_.trackers_present();
     h.contact[0] = direct_.contact_probability(0);
     h.contact[1] = direct_.contact_probability(1);
   }
@@ -218,6 +231,7 @@ class N3PPhysicsPipeline {
     sim_.targets() = q;
     controller_.reset();
     fall_.reset();
+    if (control_) control_->start(direct_.trackers(), direct_.trackers_present());
     started_ = true;
     restart_ = false;
     ++restarts_;
@@ -238,9 +252,9 @@ class N3PPhysicsPipeline {
     const S dt = S(1.0 / 30), h = dt / S(cfg_.substeps);
     const auto& hd = hands_[slot(F)];
     controller_.set_reference(model_, ref_at(F - 2), ref_at(F - 1), ref_at(F), dt, hd.contact);
-    if (cfg_.per_frame_targets) sim_.targets() = ref_at(F + cfg_.target_lead);
+    if (cfg_.per_frame_targets && !control_) sim_.targets() = ref_at(F + cfg_.target_lead);
     out_time_ = hd.time;
-    const bool policy = false;
+    const bool policy = control_ != nullptr;
     for (int k = 0; k < cfg_.substeps; ++k) {
       const S alpha = S(k + 1) / S(cfg_.substeps);
       if (policy) {
@@ -277,6 +291,16 @@ class N3PPhysicsPipeline {
 
   // 10 Hz: the targets held for the next kControlPeriod frames.
   void control_step() noexcept {
+    if (control_) {
+      if (newest_ - first_ < kControlPeriod) return;  // the start pose's targets until 3 frames exist
+      for (int k = 0; k < 3; ++k) {
+        const Hands& h = hands_[slot(newest_ - 2 + k)];
+        ctl_o_[k] = h.trackers;
+        ctl_present_[k] = h.present3();
+      }
+      if (control_->control(ctl_o_, ctl_present_, model_, sim_.data(), retarget_, sim_.targets())) ++policy_steps_;
+      return;
+    }
     sim_.targets() = ref(newest_);  // model-based: u = the newest predicted pose
   }
 
@@ -301,10 +325,17 @@ class N3PPhysicsPipeline {
     bool present[2] = {false, false};
     double time = 0;
     double contact[2] = {1, 1};  // predicted c_L, c_R
+    features::n3p::TrackerSet trackers{};  // calibrated o (policy path)
+    std::array<bool, 3> present_all{};
+    const std::array<bool, 3>& present3() const noexcept { return present_all; }
   };
 
   N3PPhysicsConfig cfg_;
   Direct direct_;
+  std::unique_ptr<ControlPredictor> control_;
+  features::n3p::TrackerSet ctl_o_[3];
+  std::array<bool, 3> ctl_present_[3];
+  long long policy_steps_ = 0;
   ModelT model_;
   Sim sim_;
   control::N3PSimRetarget<S, MB, MD> retarget_;

@@ -125,6 +125,7 @@ class N3PSimRetarget {
   int body_of(int joint) const noexcept { return body_[joint]; }
   int joint_of(int body) const noexcept { return joint_[body]; }
   double lift() const noexcept { return dy_; }  // dy
+  const Eigen::Quaterniond& alignment(int joint) const noexcept { return A_[joint]; }  // A_j
   Eigen::Vector3d to_sim_point(const Eigen::Vector3d& p) const noexcept { return p + Eigen::Vector3d(0, dy_, 0); }
   Eigen::Vector3d from_sim_point(const Eigen::Vector3d& p) const noexcept { return p - Eigen::Vector3d(0, dy_, 0); }
 
