@@ -49,23 +49,20 @@ TEST_CASE("n3p physics retarget: q -> pose -> q is exact; the standing pose stan
     r.to_q(m, pose, back);
     CHECK((q - back).cwiseAbs().maxCoeff() < 2e-5);
   }
-  // The standing pose N of the weights puts the avatar's lowest point on the floor.
-  const auto R = control::N3PSimRetarget<double, 24, 72>::neutral_rotations(p.meta());
-  for (int j = 0; j < p.skeleton().size(); ++j) {
-    const int par = p.skeleton().parents[j];
-    pose.local[j] = Eigen::Quaterniond(par < 0 ? R[j] : Eigen::Matrix3d(R[par].transpose() * R[j]));
-  }
-  pose.root_position = Eigen::Vector3d(0, p.meta().glo0[1], 0);
-  Physics::VecQ q = m.neutralConfiguration();
-  r.to_q(m, pose, q);
-  dynamics::Data<float, 24, 72> d(m);
-  dynamics::forwardKinematics(m, d, q, nullptr);
-  double lowest = 1e9;
-  for (int k = 0; k < m.num_points; ++k)
-    lowest = std::min(lowest, double(dynamics::pointPosition(d, m.points[k].body, m.points[k].pos).y() - m.points[k].radius));
-  CHECK(std::abs(lowest) < 1e-5);
-  // The hips upright and facing +Z in the standing pose.
-  CHECK(std::abs(q(3)) > 0.95);
+  // The avatar's reference pose (straight, soles on the floor) is the skeleton standing straight
+  // at meta.standing_hips_height: q -> pose puts the root there, and the hips upright.
+  const Physics::VecQ q = m.neutralConfiguration();
+  r.to_pose(m, q, pose);
+  pose::WorldPose wp;
+  wp.resize(p.skeleton().size());
+  pose::forward_kinematics(p.skeleton(), pose, wp);
+  const int ul = p.skeleton().find("UpperLeg_L"), ur = p.skeleton().find("UpperLeg_R");
+  CHECK(0.5 * (wp.position[ul].y() + wp.position[ur].y()) == doctest::Approx(double(m.bodies[0].pos.y()) - r.lift()).epsilon(1e-6));
+  CHECK(std::abs(pose.root_position.y() - p.meta().standing_hips_height) < 0.08);
+  // Straight legs: the skeleton's knee and ankle lie below the hip joint.
+  const int kl = p.skeleton().find("LowerLeg_L"), fl = p.skeleton().find("Foot_L");
+  CHECK(std::hypot(wp.position[fl].x() - wp.position[ul].x(), wp.position[fl].z() - wp.position[ul].z()) < 0.05);
+  CHECK(wp.position[kl].y() < wp.position[ul].y() - 0.3);
 }
 
 TEST_CASE("n3p physics: the model-based controller keeps a standing user upright for 10 s") {

@@ -16,9 +16,9 @@
 //   revolute joint : the twist angle of L^a_j about the hinge axis, 2 atan2(a . vec(L^a_j), w(L^a_j))
 //                    (the swing part off the axis cannot be represented and is dropped)
 //   free root      : the hip-joint centre (midpoint of the two UpperLeg joints) of the skeleton is
-//                    put on the avatar's (its Hips origin), lifted by dy: the height that puts the
-//                    avatar's lowest collision point on the floor in the standing pose N (the
-//                    avatar's de Leva legs differ from the capture skeleton's). Horizontal positions are kept: the character walks where the user
+//                    put on the avatar's (its Hips origin), lifted by dy: the avatar's reference
+//                    pose (straight legs, soles on the floor) corresponds to the skeleton standing
+//                    straight at meta.standing_hips_height (the de Leva legs differ in length). Horizontal positions are kept: the character walks where the user
 //                    walks. Trackers given to the simulation get the same lift (to_sim_point).
 // Velocities: finite differences of two configurations in the model's velocity layout (spherical:
 // log(q0^-1 q1) / dt in the child frame; free root: body-frame angular and linear velocity).
@@ -50,9 +50,10 @@ class N3PSimRetarget {
   // Every skeleton joint must be a body of the model with the same name and parent; the root must
   // be the model's free joint. `neutral`: world rotations of the skeleton's joints in the standing
   // pose, facing +Z (see neutral_rotations()); `neutral_hips_height`: the skeleton root's height
-  // in it. Throws LoadError.
+  // in it (sets the joint alignment); `standing_hips_height`: the skeleton's root height standing
+  // straight (N3PMeta::standing_hips_height; sets the lift). Throws LoadError.
   N3PSimRetarget(const ModelT& m, const pose::Skeleton& s, const std::vector<Eigen::Matrix3d>& neutral,
-                 double neutral_hips_height) {
+                 double standing_hips_height) {
     if (s.size() != m.nb || m.nb > MB || static_cast<int>(neutral.size()) != s.size())
       throw LoadError("n3p_sim_retarget", "skeleton and model differ in joint count");
     for (int j = 0; j < s.size(); ++j) {
@@ -86,23 +87,10 @@ class N3PSimRetarget {
     if (ul < 0 || ur < 0 || s.parents[ul] != 0 || s.parents[ur] != 0)
       throw LoadError("n3p_sim_retarget", "the skeleton's UpperLeg_L/R must be children of the root");
     hip_centre_ = 0.5 * (s.offsets[ul] + s.offsets[ur]);
-    // dy: the avatar in the standing pose N, with its lowest collision point on the floor.
-    pose::BodyPose np;
-    np.resize(n_);
-    for (int j = 0; j < n_; ++j) {
-      const int par = s.parents[j];
-      np.local[j] = Eigen::Quaterniond(par < 0 ? neutral[j] : Eigen::Matrix3d(neutral[par].transpose() * neutral[j]));
-    }
-    np.root_position = Eigen::Vector3d(0, neutral_hips_height, 0);
-    VecQ q = m.neutralConfiguration();
-    dy_ = 0;
-    to_q(m, np, q);
-    auto d = std::make_unique<dynamics::Data<S, MB, MD>>(m);
-    dynamics::forwardKinematics(m, *d, q, nullptr);
-    double lowest = 1e9;
-    for (int k = 0; k < m.num_points; ++k)
-      lowest = std::min(lowest, double(dynamics::pointPosition(*d, m.points[k].body, m.points[k].pos).y() - m.points[k].radius));
-    dy_ = m.num_points > 0 ? -lowest : 0.0;
+    // dy: the avatar's reference pose (identity joints: straight legs, soles on the floor) is the
+    // skeleton standing straight with its root at `standing_hips_height`; their hip-joint centres
+    // coincide: L^s_root = A_root^-1 there.
+    dy_ = double(m.bodies[body_[0]].pos.y()) - (standing_hips_height + (Ainv_[0] * hip_centre_).y());
   }
 
   // World rotations of the predictor's default standing state (meta.initial_state g_lo^0, g_up^0 in
@@ -117,8 +105,7 @@ class N3PSimRetarget {
   }
   template <class Meta>
   static N3PSimRetarget from_meta(const ModelT& m, const Meta& meta) {
-    const double hips_y = meta.glo0[features::n3p::LowerBlock::pos(0) + 1];
-    return N3PSimRetarget(m, meta.skeleton, neutral_rotations(meta), hips_y);
+    return N3PSimRetarget(m, meta.skeleton, neutral_rotations(meta), meta.standing_hips_height);
   }
 
   int joints() const noexcept { return n_; }
