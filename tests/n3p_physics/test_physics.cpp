@@ -82,6 +82,7 @@ TEST_CASE("n3p physics: the model-based controller keeps a standing user upright
     CHECK(p.residual().force <= max_force + 1e-6);
     CHECK(p.residual().torque <= max_torque + 1e-6);
     CHECK(p.penetration() < 0.01);
+    CHECK((p.contact(0) || p.contact(1)));  // standing: on its feet
   }
   CHECK(frames >= 295);
   CHECK(p.falls() == 0);

@@ -6,11 +6,14 @@
 //   TrackerFrame -> Resampler (30 Hz) -> N3PPipeline::step (sanitizer, calibration, predictor, IK)
 //     -> reference q_ref(N) (control/n3p_sim_retarget.hpp)
 //     -> every 3 frames (10 Hz, §6): a control step sets the PD targets, held until the next one:
-//          ControllerKind::ModelBased (default, no RL): targets = q_ref of the newest frame, plus
-//            per frame inverse-dynamics feed-forward and a bounded residual root wrench
-//            (control/model_based_controller.hpp; its magnitude is reported every step);
 //          ControllerKind::Policy: the combined control predictor + learned policy pi
-//            (control/n3p_control_predictor.hpp), when policy weights are given.
+//            (control/n3p_control_predictor.hpp), when policy weights are given;
+//          ControllerKind::ModelBased (default, no RL): targets = q_ref of the newest frame; with
+//            `per_frame_targets` (default) they are refreshed every frame to the reference
+//            `target_lead` frames ahead of the tracked one instead (no learned anticipation
+//            exists to make a 0.1 s hold useful); plus per frame an inverse-dynamics
+//            feed-forward and a bounded residual wrench (control/model_based_controller.hpp; its
+//            magnitude is reported every step: residual(), residual_stats());
 //     -> per substep: controller torques + tracker position correction (§6.2, Eq. (19),
 //        control/tracker_correction.hpp) -> Simulator::step(1/120)
 //     -> once per frame: fall detection (§9, control/fall_detector.hpp) -> reset to the reference
@@ -22,16 +25,17 @@
 // frame N - 3: kDelayFrames = 3 frames = 0.1 s behind the input. output_frame() / output_time()
 // say which input frame (and time stamp) the current pose reproduces; evaluation compares it with
 // that frame's ground truth, which is the paper's "shift the generated motion forward by 0.1 s"
-// (`shift_for_evaluation` in examples/n3p_physics_eval.cpp).
+// (examples/n3p_physics_eval.cpp does so by default; --no-shift compares with the current frame).
 //
 // Bad input and failures (defined recovery, tested):
 //   - tracker problems (NaN, lost headset or controllers, jumps) are handled by the direct
 //     pipeline (held pose / o* substitution / predictor restart); a reference root that jumps by
 //     more than `max_reference_jump` in one frame, or a resampler gap, restarts the physics: the
-//     character is placed on the next reference pose with its velocity;
+//     character is placed on the next reference pose at rest;
 //   - a simulation step that fails (non-finite, velocity limit: dynamics::StepStatus) is rolled
 //     back by the simulator; the character is then reset to the reference pose;
-//   - a fall (FallDetector) resets the character to the reference pose and the simulation resumes;
+//   - a fall (FallDetector) resets the character to the reference pose (with the reference
+//     velocity) and the simulation resumes;
 //   - the output is always finite: a pose that would not be keeps the last one.
 // Per frame: no allocation, no exception, no lock (tests/n3p_physics/test_alloc.cpp).
 #pragma once
@@ -188,6 +192,18 @@ class N3PPhysicsPipeline {
   const ModelT& model() const noexcept { return model_; }
   const control::N3PSimRetarget<S, MB, MD>& retarget() const noexcept { return retarget_; }
   const pose::Skeleton& skeleton() const noexcept { return direct_.skeleton(); }
+  const pose::JointMap& joint_map() const noexcept { return direct_.joint_map(); }
+  // Foot (0 left, 1 right) of the simulated character touching the ground (an active contact on its
+  // Foot or Toes body in the last step): the physical contact, not the predicted one.
+  bool contact(int foot) const noexcept {
+    const int f = retarget_.body_of(direct_.joint_map()[foot ? pose::Role::FootR : pose::Role::FootL]);
+    const int t = retarget_.body_of(direct_.joint_map()[foot ? pose::Role::ToeR : pose::Role::ToeL]);
+    for (int k = 0; k < sim_.numContacts(); ++k) {
+      const auto& c = sim_.contactAt(k);
+      if (c.active && (c.body == f || c.body == t)) return true;
+    }
+    return false;
+  }
   const N3PMeta& meta() const noexcept { return direct_.meta(); }
   double user_scale() const noexcept { return direct_.user_scale(); }
   const N3PPhysicsConfig& config() const noexcept { return cfg_; }
