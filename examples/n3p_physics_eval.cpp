@@ -120,7 +120,7 @@ int main(int argc, char** argv) {
   }
   Metrics md, mp;
   double sim_pen = 0, sim_pen_max = 0;
-  long sim_n = 0, falls = 0, failures = 0, clips = 0;
+  long sim_n = 0, falls = 0, failures = 0, clips = 0, by[4] = {};
   avatar::ResidualStats rs;
   int idx = -1;
   for (const auto& c : d["clips"]) {
@@ -176,6 +176,7 @@ int main(int argc, char** argv) {
     rs.torque_max = std::max(rs.torque_max, r.torque_max);
     rs.steps += r.steps;
     falls += p.falls();
+    for (int k = 1; k < 4; ++k) by[k] += p.falls(static_cast<control::FallReason>(k));
     failures += p.sim_failures();
   }
   std::printf("Neural3Points, %ld validation clips (every %d-th), 3-point input, physics output %s\n", clips, every,
@@ -183,8 +184,8 @@ int main(int argc, char** argv) {
   md.print("direct");
   mp.print("physics");
   std::printf("physics: residual root force mean %.1f N, max %.1f N; torque mean %.1f N m, max %.1f N m (%lld steps); "
-              "falls %ld, failed steps %ld; simulated body below floor mean %.2f mm, max %.1f mm\n",
-              rs.force_mean(), rs.force_max, rs.torque_mean(), rs.torque_max, rs.steps, falls, failures,
+              "falls %ld (height %ld, tilt %ld, diverged %ld), failed steps %ld; simulated body below floor mean %.2f mm, max %.1f mm\n",
+              rs.force_mean(), rs.force_max, rs.torque_mean(), rs.torque_max, rs.steps, falls, by[1], by[2], by[3], failures,
               1000 * sim_pen / std::max(1L, sim_n), 1000 * sim_pen_max);
   return 0;
 }

@@ -163,6 +163,7 @@ class N3PPhysicsPipeline {
     residual_ = {};
     stats_ = {};
     falls_ = sim_failures_ = restarts_ = 0;
+    falls_by_.fill(0);
   }
 
   // --- results --------------------------------------------------------------------------------
@@ -181,6 +182,7 @@ class N3PPhysicsPipeline {
   const ResidualStats& residual_stats() const noexcept { return stats_; }
   void clear_residual_stats() noexcept { stats_ = {}; }
   long long falls() const noexcept { return falls_; }            // fall resets
+  long long falls(control::FallReason why) const noexcept { return falls_by_[static_cast<int>(why)]; }
   long long sim_failures() const noexcept { return sim_failures_; }  // rolled-back steps -> reset
   long long restarts() const noexcept { return restarts_; }      // physics (re)starts
   ControllerKind controller_kind() const noexcept { return control_ ? ControllerKind::Policy : ControllerKind::ModelBased; }
@@ -297,10 +299,12 @@ class N3PPhysicsPipeline {
     const int r = retarget_.body_of(0);
     const VecQ& qr = ref_at(F);
     const Eigen::Quaterniond Rr(double(qr(3)), double(qr(4)), double(qr(5)), double(qr(6)));
-    if (fall_.update(d.p[r].template cast<double>(), d.R[r].col(1).template cast<double>(),
-                     Eigen::Vector3d(double(qr(0)), double(qr(1)), double(qr(2))),
-                     Rr.normalized() * Eigen::Vector3d::UnitY()) != control::FallReason::None) {
+    const control::FallReason why = fall_.update(d.p[r].template cast<double>(), d.R[r].col(1).template cast<double>(),
+                                                 Eigen::Vector3d(double(qr(0)), double(qr(1)), double(qr(2))),
+                                                 Rr.normalized() * Eigen::Vector3d::UnitY());
+    if (why != control::FallReason::None) {
       ++falls_;
+      ++falls_by_[static_cast<int>(why)];
       reset_character(F);
     }
   }
@@ -371,6 +375,7 @@ class N3PPhysicsPipeline {
   control::ResidualWrench residual_;
   ResidualStats stats_;
   long long falls_ = 0, sim_failures_ = 0, restarts_ = 0;
+  std::array<long long, 4> falls_by_{};
 };
 
 }  // namespace sparsebody::avatar
