@@ -2,12 +2,17 @@
 //
 //   sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p] [--no-pelvis]
 //                   [--weights FILE|DIR] [--mode streaming|window] [--no-contact-ik]
-//                   [--trackers-out trackers.csv] [--calibration-frame N] [--storage float|f16|q8] [--quiet]
+//                   [--trackers-out trackers.csv] [--calibration-frame N] [--storage float|f16|q8] [--physics]
+//                   [--quiet]
 //
 // Model choice (--model auto, the default): LoBSTr when the input has a pelvis tracker (it needs
 // one), Neural3Points (direct mode) when it has only the headset and controllers, which is what
 // every headset has. The demo prints which model it picked and why. --no-pelvis drops the pelvis
 // tracker from the input (a BVH clip synthesises one from the hips) to see the 3-point model.
+// --physics runs Neural3Points' normal mode: the prediction drives a simulated avatar (120 Hz, PD
+// servos, the default model-based controller with its bounded residual wrench; avatar/n3p_physics.hpp).
+// Its output is 0.1 s behind the input; the metrics compare it with the frame it reproduces, and the
+// residual wrench and falls are printed at the end.
 // --storage picks how the network weights are held: float (default), f16 (half the bytes) or q8
 // (int8, a quarter; AVX-512 VNNI kernel, portable fallback elsewhere). See the README for speed and
 // accuracy of each.
@@ -29,6 +34,7 @@
 
 #include "sparsebody/avatar/lobstr_pipeline.hpp"
 #include "sparsebody/avatar/n3p_direct.hpp"
+#include "sparsebody/avatar/n3p_physics.hpp"
 #include "sparsebody/io/bvh.hpp"
 #include "sparsebody/io/tracker_csv.hpp"
 #include "sparsebody/trackers/synthesis.hpp"
@@ -43,7 +49,7 @@ struct Options {
   std::string input, output = "avatar.bvh", weights, trackers_out;
   Model model = Model::Auto;
   avatar::RunMode mode = avatar::RunMode::Streaming;
-  bool contact_ik = true, quiet = false, no_pelvis = false;
+  bool contact_ik = true, quiet = false, no_pelvis = false, physics = false;
   std::string storage = "float";
   int calibration_frame = 0;
 };
@@ -53,7 +59,7 @@ struct Options {
                "%s\nusage: sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p] [--no-pelvis]\n"
                "                       [--weights FILE (LoBSTr) | DIR (Neural3Points: n3p_{signal,lower,upper}.json)]\n"
                "                       [--mode streaming|window] [--no-contact-ik] [--trackers-out trackers.csv]\n"
-               "                       [--calibration-frame N] [--storage float|f16|q8] [--quiet]\n",
+               "                       [--calibration-frame N] [--storage float|f16|q8] [--physics] [--quiet]\n",
                msg);
   std::exit(2);
 }
@@ -72,6 +78,7 @@ Options parse(int argc, char** argv) {
       else if (m == "n3p" || m == "neural3points") o.model = Model::N3P;
       else usage("--model must be auto, lobstr or n3p");
     } else if (a == "--no-pelvis") o.no_pelvis = true;
+    else if (a == "--physics") o.physics = true;
     else if (a == "--storage") {
       o.storage = next();
       if (o.storage != "float" && o.storage != "f16" && o.storage != "q8") usage("--storage must be float, f16 or q8");
@@ -179,6 +186,37 @@ void set_scale(avatar::N3PPipeline<T, A, B, C, W>& p, double s) {
   c.base.scale = s;
   p.set_calibration(c);
 }
+template <typename T, int A, int B, int C, typename S, int MB, int MD, typename W>
+void set_scale(avatar::N3PPhysicsPipeline<T, A, B, C, S, MB, MD, W>& p, double s) {
+  features::n3p::N3PCalibration c;
+  c.base.scale = s;
+  p.set_calibration(c);
+}
+template <typename T, int A, int B, int C, typename S, int MB, int MD, typename W>
+void describe(const avatar::N3PPhysicsPipeline<T, A, B, C, S, MB, MD, W>& p, const Options& o) {
+  std::printf("model   Neural3Points physics (normal) mode %s: G_sig/G_lo/G_up hidden %d/%d/%d, %s weights, simulated\n"
+              "        avatar %d bodies / %d DoF at 120 Hz, model-based controller, output %.1f s behind the input\n",
+              o.weights.c_str(), A, B, C, o.storage.c_str(), p.model().nb, p.model().nv, p.delay_seconds());
+}
+// Seconds since the first input frame of the pose the pipeline shows now.
+template <class Pipeline>
+double output_seconds(const Pipeline& p, double) {
+  return p.frames() / p.meta().frame_rate - 1.0 / p.meta().frame_rate;
+}
+template <typename T, int A, int B, int C, typename S, int MB, int MD, typename W>
+double output_seconds(const avatar::N3PPhysicsPipeline<T, A, B, C, S, MB, MD, W>& p, double t0) {
+  return p.output_time() - t0;
+}
+template <class Pipeline>
+void report_physics(const Pipeline&) {}
+template <typename T, int A, int B, int C, typename S, int MB, int MD, typename W>
+void report_physics(const avatar::N3PPhysicsPipeline<T, A, B, C, S, MB, MD, W>& p) {
+  const auto& r = p.residual_stats();
+  std::printf("physics residual wrench (non-physical help) mean %.1f N / %.1f N m, max %.1f N / %.1f N m over %lld steps;"
+              " %lld falls reset, %lld failed steps\n",
+              r.force_mean(), r.torque_mean(), r.force_max, r.torque_max, r.steps, p.falls(), p.sim_failures());
+}
+
 template <int H, int L, typename W>
 void describe(const avatar::LoBSTrPipeline<float, H, L, W>& p, const Options& o) {
   std::printf("model   LoBSTr %s: H=%d latent=%d, %s weights, %s mode%s, %.0f fps\n", o.weights.c_str(), H, L, o.storage.c_str(),
@@ -243,7 +281,7 @@ int run(const Options& o, Pipeline& pipe, Input& in, const std::string& credit) 
       pose::BodyPose out = pipe.pose();
       writer.add(out, 100.0 * user);
       if (have_truth) {
-        const double t = pipe.frames() / pipe.meta().frame_rate - 1.0 / pipe.meta().frame_rate;
+        const double t = output_seconds(pipe, frames.front().time);
         const int gf = std::min(clip.frames - 1, static_cast<int>(std::lround(t / clip.frame_time)));
         truth.at(gf);
         const auto& W = pipe.world();
@@ -304,6 +342,7 @@ int run(const Options& o, Pipeline& pipe, Input& in, const std::string& credit) 
   std::printf("wrote   %s: %ld frames at %.0f fps (standard skeleton at the user's size, centimetres)\n", o.output.c_str(),
               steps, pipe.meta().frame_rate);
   std::printf("speed   %.1f us per model step (whole pipeline, this run, including resampling)\n", 1e6 * step_seconds / std::max(1L, steps));
+  report_physics(pipe);
   if (have_truth && m.n > 0) {
     std::printf("metrics vs the input clip (%ld frames):\n", m.n);
     std::printf("  contact accuracy       %6.2f %%\n", 100.0 * m.contact_ok / std::max(1L, m.contact_n));
@@ -331,6 +370,16 @@ int run_lobstr(const Options& o, Input& in) {
 }
 
 template <typename W = float>
+int run_n3p_physics(const Options& o, Input& in) {
+  using Pipeline = avatar::N3PPhysicsPipeline<float, 64, 128, 128, float, 24, 72, W>;
+  const auto w = Pipeline::load(o.weights);
+  avatar::N3PPhysicsConfig cfg;
+  cfg.direct.foot_ik = o.contact_ik;
+  Pipeline pipe(w, cfg);
+  return run(o, pipe, in, w.lo->info().credit);
+}
+
+template <typename W = float>
 int run_n3p(const Options& o, Input& in) {
   using Pipeline = avatar::N3PPipeline<float, 64, 128, 128, W>;  // the paper's sizes (the shipped weights)
   if (o.mode != avatar::RunMode::Streaming) std::printf("note    --mode window is LoBSTr-only; Neural3Points always streams\n");
@@ -349,7 +398,14 @@ int main(int argc, char** argv) {
     Input in;
     read_input(o, in);
     Model model = o.model;
-    if (model == Model::Auto) {
+    if (o.physics && model == Model::LoBSTr) {
+      std::fprintf(stderr, "error: --physics is Neural3Points' normal mode (use --model n3p or auto)\n");
+      return 1;
+    }
+    if (o.physics && model == Model::Auto) {
+      model = Model::N3P;
+      std::printf("choice  Neural3Points: --physics asks for its normal (simulated) mode\n");
+    } else if (model == Model::Auto) {
       model = in.pelvis ? Model::LoBSTr : Model::N3P;
       std::printf("choice  %s: %s (--model lobstr|n3p to override)\n", model == Model::LoBSTr ? "LoBSTr" : "Neural3Points",
                   in.pelvis ? "the input has a pelvis tracker, which LoBSTr uses for the lower body"
@@ -360,6 +416,11 @@ int main(int argc, char** argv) {
     }
     if (model == Model::N3P) {
       if (o.weights.empty()) o.weights = SPARSEBODY_DEFAULT_N3P_WEIGHTS;
+      if (o.physics) {
+        if (o.storage == "f16") return run_n3p_physics<nn::f16>(o, in);
+        if (o.storage == "q8") return run_n3p_physics<nn::q8>(o, in);
+        return run_n3p_physics(o, in);
+      }
       if (o.storage == "f16") return run_n3p<nn::f16>(o, in);
       if (o.storage == "q8") return run_n3p<nn::q8>(o, in);
       return run_n3p(o, in);

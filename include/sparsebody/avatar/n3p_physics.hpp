@@ -79,16 +79,18 @@ struct ResidualStats {
   double torque_mean() const noexcept { return steps ? torque_sum / steps : 0; }
 };
 
-template <typename T = float, int HSig = 64, int HLo = 128, int HUp = 128, typename S = float, int MB = 24, int MD = 72>
+// W: stored weight type of the networks (T, nn::f16 or nn::q8: see nn/int8.hpp).
+template <typename T = float, int HSig = 64, int HLo = 128, int HUp = 128, typename S = float, int MB = 24, int MD = 72,
+          typename W = T>
 class N3PPhysicsPipeline {
  public:
-  using Direct = N3PPipeline<T, HSig, HLo, HUp>;
+  using Direct = N3PPipeline<T, HSig, HLo, HUp, W>;
   using Weights = typename Direct::Weights;
   using ModelT = dynamics::Model<S, MB, MD>;
   using VecQ = typename ModelT::VecQ;
   using VecV = typename ModelT::VecV;
   using Sim = dynamics::Simulator<S, MB, MD>;
-  using ControlPredictor = control::N3PControlPredictor<T, HSig, HLo, HUp, S, MB, MD>;
+  using ControlPredictor = control::N3PControlPredictor<T, HSig, HLo, HUp, S, MB, MD, W>;
   using PolicyWeights = typename ControlPredictor::PolicyWeights;
   static constexpr int kDelayFrames = 3;    // 0.1 s at 30 Hz (see the header comment)
   static constexpr int kControlPeriod = 3;  // frames per control step (10 Hz)

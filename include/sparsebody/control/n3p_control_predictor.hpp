@@ -32,11 +32,12 @@
 
 namespace sparsebody::control {
 
-template <typename T, int HSig, int HLo, int HUp, typename S, int MB, int MD>
+// W: stored weight type of the predictor and policy networks (T, nn::f16 or nn::q8).
+template <typename T, int HSig, int HLo, int HUp, typename S, int MB, int MD, typename W = T>
 class N3PControlPredictor {
  public:
-  using Predictor = avatar::N3PPredictor<T, HSig, HLo, HUp>;
-  using PolicyNet = networks::N3PPolicyNet<T, n3p_policy::kPolicyIn, n3p_policy::kPolicyOut>;
+  using Predictor = avatar::N3PPredictor<T, HSig, HLo, HUp, W>;
+  using PolicyNet = networks::N3PPolicyNet<T, n3p_policy::kPolicyIn, n3p_policy::kPolicyOut, 256, W>;
   using PolicyWeights = nn::NetworkWeights<PolicyNet>;
   using ModelT = dynamics::Model<S, MB, MD>;
   using VecQ = typename ModelT::VecQ;
