@@ -99,10 +99,10 @@ class Simulator {
   int numContacts() const { return nc_; }
   int numActiveContacts() const {
     int n = 0;
-    for (int k = 0; k < nc_; ++k) n += contacts_[k].active ? 1 : 0;
+    for (int k = 0; k < nc_; ++k) n += contacts()[k].active ? 1 : 0;
     return n;
   }
-  const Contact<S>& contactAt(int k) const { return contacts_[k]; }
+  const Contact<S>& contactAt(int k) const { return contacts()[k]; }
   int contactOverflow() const { return overflow_; }
   int lastPasses() const { return passes_; }
 
@@ -120,8 +120,12 @@ class Simulator {
     const S hd = implicit_damping ? h : S(0);
     const bool with_kd = mode == ControlMode::PdTargets;
     if (contacts_enabled) {
-      for (int k = 0; k < nc_; ++k) prev_contacts_[k] = contacts_[k];  // warm start (see detectContacts)
-      nc_ = detectContacts(m_, d_, env, contact, contacts_, overflow_, prev_contacts_.data(), warm_start_contacts ? nc_ : 0);
+      // Two buffers, flipped: the previous step's contacts stay readable for the warm start (see
+      // detectContacts) without copying them.
+      const int prev = current_;
+      current_ ^= 1;
+      nc_ = detectContacts(m_, d_, env, contact, contacts(), overflow_, contact_buffers_[prev].data(),
+                           warm_start_contacts ? nc_ : 0);
     } else {
       nc_ = 0;
     }
@@ -133,11 +137,11 @@ class Simulator {
       passes_ = 1;
     } else {
       for (int pass = 0; pass < contact.max_passes; ++pass) {
-        assembleContacts(m_, d_, contacts_, nc_, contact, h);
+        assembleContacts(m_, d_, contacts(), nc_, contact, h);
         ok = abaSolve(m_, d_, tau_, qdd_, hd, with_kd);
         ++passes_;
         if (!ok) break;
-        if (!updateContactSet(m_, d_, contacts_, nc_, contact, h)) break;
+        if (!updateContactSet(m_, d_, contacts(), nc_, contact, h)) break;
       }
       d_.has_ext = false;
     }
@@ -163,7 +167,10 @@ class Simulator {
   Data<S, MB, MD> d_;
   VecQ q_, q_target_, q_prev_;
   VecV v_, v_target_, tau_user_, tau_, qdd_, v_prev_;
-  std::array<Contact<S>, MaxContacts> contacts_{}, prev_contacts_{};
+  std::array<Contact<S>, MaxContacts>& contacts() { return contact_buffers_[current_]; }
+  const std::array<Contact<S>, MaxContacts>& contacts() const { return contact_buffers_[current_]; }
+  std::array<std::array<Contact<S>, MaxContacts>, 2> contact_buffers_{};  // this step's, the previous step's
+  int current_ = 0;
   int nc_ = 0, overflow_ = 0, passes_ = 0;
 };
 
