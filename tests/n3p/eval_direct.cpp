@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "sparsebody/avatar/n3p_direct.hpp"
+#include "sparsebody/pose/rotation6d.hpp"
 
 using namespace sparsebody;
 
@@ -36,10 +37,9 @@ int evaluate(const nlohmann::json& d, const std::string& prefix, const char* sto
         for (int k = 0; k < 3; ++k) {
           const auto& p3 = c["p"][t];
           const auto& q = c["q6"][t];
-          Eigen::Matrix3d R;
-          R.col(2) = Eigen::Vector3d(q[6 * k], q[6 * k + 1], q[6 * k + 2]).normalized();
-          R.col(0) = Eigen::Vector3d(q[6 * k + 3], q[6 * k + 4], q[6 * k + 5]).cross(R.col(2)).normalized();
-          R.col(1) = R.col(2).cross(R.col(0));
+          double d6[6];  // forward (Z) then up (Y) axis, the pipeline's 6D layout
+          for (int i = 0; i < 6; ++i) d6[i] = q[6 * k + i];
+          const Eigen::Matrix3d R = pose::from6d(d6);
           f.pose[k].position = trackers::to_xr(Eigen::Vector3d(p3[3 * k], p3[3 * k + 1], p3[3 * k + 2]));
           f.pose[k].orientation = trackers::to_xr(Eigen::Quaterniond(R));
           f.valid[k] = true;
