@@ -14,6 +14,8 @@
 
 #include "sparsebody/avatar/n3p_direct.hpp"
 
+#include "n3p_default_weights.hpp"
+
 using namespace sparsebody;
 
 namespace {
@@ -21,17 +23,7 @@ using Pipeline = avatar::N3PPipeline<float, 64, 128, 128>;
 
 template <class P = Pipeline>
 const typename P::Weights* weights() {
-  static typename P::Weights w;
-  static bool tried = false, ok = false;
-  if (!tried) {
-    tried = true;
-    try {
-      w = P::load(SPARSEBODY_N3P_WEIGHTS);
-      ok = true;
-    } catch (const std::exception&) {
-    }
-  }
-  return ok ? &w : nullptr;
+  return n3p_default_weights<P>();
 }
 
 trackers::TrackerFrame frame(int t) {

@@ -14,6 +14,8 @@
 
 #include "sparsebody/avatar/n3p_physics.hpp"
 
+#include "n3p_default_weights.hpp"
+
 using namespace sparsebody;
 
 namespace {
@@ -23,17 +25,7 @@ using PhysicsQ8 = avatar::N3PPhysicsPipeline<float, 64, 128, 128, float, 24, 72,
 
 template <class P = Physics>
 const typename P::Weights* weights() {
-  static typename P::Weights w;
-  static bool tried = false, ok = false;
-  if (!tried) {
-    tried = true;
-    try {
-      w = P::load(SPARSEBODY_N3P_WEIGHTS);
-      ok = true;
-    } catch (const std::exception&) {
-    }
-  }
-  return ok ? &w : nullptr;
+  return n3p_default_weights<P>();
 }
 
 trackers::TrackerFrame frame(long t) {
