@@ -6,6 +6,11 @@
 //   D_i = S_i^T I^A_i S_i + h Kd_i,   u_i = tau_i - S_i^T p^A_i,
 // and the same D_i is used in the parent update I^a_i = I^A_i - U_i D_i^-1 U_i^T, so the result is
 // exactly the (M + h Kd)^-1 solve (this is what the CRBA test checks). Kd_i = (kd_i + damping_i) I.
+//
+// Optional root servo damping K_r = diag(kr_w I3, kr_v I3) on the free root's 6 DoFs (a PD servo on
+// the root, e.g. a residual wrench toward a reference root, dynamics/simulator.hpp RootServo): the
+// same implicit form, D_root = I^A_root + h K_r. The root's joint force is I^A a + p^A with
+// a = qdd + a' (a' = X a_0: gravity), so (I^A + h K_r) a = tau - p^A + h K_r a'.
 #pragma once
 #include "kinematics.hpp"
 
@@ -21,10 +26,12 @@ inline void abaKinematics(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const t
 
 // Passes 2 and 3, after abaKinematics. h_damp = h for implicit damping, 0 for explicit.
 // When include_kd is false only the passive damping is implicit (torque-driven use).
+// root_damping: K_r's diagonal (angular then linear, free-root layout), nullptr for none.
 // Returns false when a joint-space term D_i is not positive (degenerate model or NaN).
 template <class S, int MB, int MD>
 inline bool abaSolve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
-                     typename Model<S, MB, MD>::VecV& qdd, S h_damp, bool include_kd = true) {
+                     typename Model<S, MB, MD>::VecV& qdd, S h_damp, bool include_kd = true,
+                     const Vec6<S>* root_damping = nullptr) {
   bool ok = true;
   for (int i = 0; i < m.nb; ++i) {
     d.IA[i] = m.bodies[i].I;
@@ -43,7 +50,13 @@ inline bool abaSolve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typena
     Vec6<S> pa;   // p^a_i
     switch (b.joint) {
       case JointType::Free: {  // root only (validated): solved in pass 3
-        if (!choleskyFactor6(IA, d.root_L)) ok = false;
+        if (root_damping) {
+          Mat6<S> D = IA;
+          for (int r = 0; r < 6; ++r) D(r, r) += h_damp * (*root_damping)(r);
+          if (!choleskyFactor6(D, d.root_L)) ok = false;
+        } else if (!choleskyFactor6(IA, d.root_L)) {
+          ok = false;
+        }
         d.u[i].setZero();
         continue;
       }
@@ -120,9 +133,11 @@ inline bool abaSolve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typena
     for (int r = 0; r < 6; ++r) ap(r) += d.c[i](r);
     const int k = b.v_index;
     switch (b.joint) {
-      case JointType::Free: {  // S = I: qdd = (I^A)^-1 (tau - p^A) - a'
+      case JointType::Free: {  // S = I: qdd = (I^A + h K_r)^-1 (tau - p^A + h K_r a') - a'
         Vec6<S> x;
         for (int r = 0; r < 6; ++r) x(r) = tau(k + r) - d.pA[i](r);
+        if (root_damping)
+          for (int r = 0; r < 6; ++r) x(r) += h_damp * (*root_damping)(r) * ap(r);
         choleskySolve6(d.root_L, x);
         for (int r = 0; r < 6; ++r) qdd(k + r) = x(r) - ap(r);
         d.a[i] = x;
@@ -161,13 +176,14 @@ inline bool abaSolve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typena
   return ok;
 }
 
-// Forward dynamics qdd = (M + h Kd)^-1 (tau - C(q, qd) + J^T f_ext).
+// Forward dynamics qdd = (M + h Kd)^-1 (tau - C(q, qd) + J^T f_ext) (Kd with K_r on the root DoFs).
 template <class S, int MB, int MD>
 inline bool aba(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecQ& q,
                 const typename Model<S, MB, MD>::VecV& qd, const typename Model<S, MB, MD>::VecV& tau,
-                typename Model<S, MB, MD>::VecV& qdd, S h_damp = S(0), bool include_kd = true) {
+                typename Model<S, MB, MD>::VecV& qdd, S h_damp = S(0), bool include_kd = true,
+                const Vec6<S>* root_damping = nullptr) {
   abaKinematics(m, d, q, qd);
-  return abaSolve(m, d, tau, qdd, h_damp, include_kd);
+  return abaSolve(m, d, tau, qdd, h_damp, include_kd, root_damping);
 }
 
 }  // namespace sparsebody::dynamics

@@ -11,6 +11,8 @@
 // propagated. The caller decides what to do (typically setState() with a fresh pose and zero
 // velocity, as Neural3Points' rollouts reset the character).
 #pragma once
+#include <algorithm>
+#include <limits>
 #include <ostream>
 
 #include "aba.hpp"
@@ -39,6 +41,27 @@ inline const char* statusName(StepStatus s) {
 
 inline std::ostream& operator<<(std::ostream& os, StepStatus s) { return os << statusName(s); }
 
+// PD servo on the free root toward the root entries of targets() (position p*, orientation R*) and
+// targetVelocities() (angular w*, linear v*, in the target's body frame: the layout of v), in the
+// world frame:
+//   F = clamp(kp_v (p* - p) + kd_v (R* v* - v+), max_force),  N = clamp(kp_w log(R* R^T) + kd_w (R* w* - w+), max_torque)
+// with the damping evaluated at the next velocity (v+, w+) implicitly inside ABA (D_root = I^A + h K_r,
+// aba.hpp), exactly like the joint servos' kd: a stiff root servo on the light pelvis is stable at
+// h = 1/120, where the same gains explicit diverge. A block (force or torque) whose explicit part
+// already exceeds its bound is applied as that bounded force alone (no implicit part); a block
+// whose implicit part -h kd a takes it past the bound is re-solved that way (one more ABA solve on
+// such steps), so the applied wrench never exceeds the bounds. The step reports the wrench it
+// applied: rootServoForce() / rootServoTorque(). Used by Neural3Points' default controller as the
+// residual wrench ("hand of God") that keeps the character balanced.
+template <class S>
+struct RootServo {
+  bool enabled = false;
+  S kp_linear = 0, kd_linear = 0;    // N/m, N s/m
+  S kp_angular = 0, kd_angular = 0;  // N m/rad, N m s/rad
+  S max_force = std::numeric_limits<S>::infinity();   // bound of |F| (N); 0: no force
+  S max_torque = std::numeric_limits<S>::infinity();  // bound of |N| (N m); 0: no torque
+};
+
 enum class ControlMode : unsigned char {
   PdTargets,  // Neural3Points: tau = PD(q_target) + tau_user, servo damping implicit
   Torque,     // QuestSim: tau = tau_user, only passive joint damping implicit
@@ -59,8 +82,11 @@ class Simulator {
   Environment<S, MaxBoxes> env;
   bool contacts_enabled = true;
   bool warm_start_contacts = true;  // sliding contacts start from last step's damper (fewer solver passes)
+  RootServo<S> root_servo;          // off by default; needs a free root
 
   explicit Simulator(const ModelT& model) : m_(model), d_(model) {
+    for (int i = 0; i < m_.nb; ++i)
+      if (m_.bodies[i].joint == JointType::Free) root_ = i;
     q_ = m_.neutralConfiguration();
     v_.setZero(m_.nv);
     q_target_ = q_;
@@ -105,10 +131,14 @@ class Simulator {
   const Contact<S>& contactAt(int k) const { return contacts()[k]; }
   int contactOverflow() const { return overflow_; }
   int lastPasses() const { return passes_; }
+  // World-frame wrench the root servo applied in the last step (explicit + implicit part; zero when off).
+  const Vec3<S>& rootServoForce() const { return root_force_; }
+  const Vec3<S>& rootServoTorque() const { return root_torque_; }
 
   StepStatus step(S h) {
+    const bool servo_root = root_servo.enabled && root_ >= 0;
     if (!q_.allFinite() || !v_.allFinite() || !tau_user_.allFinite() ||
-        (mode == ControlMode::PdTargets && (!q_target_.allFinite() || !v_target_.allFinite())))
+        ((mode == ControlMode::PdTargets || servo_root) && (!q_target_.allFinite() || !v_target_.allFinite())))
       return StepStatus::NonFiniteInput;
     q_prev_ = q_;
     v_prev_ = v_;
@@ -117,6 +147,10 @@ class Simulator {
     if (mode == ControlMode::PdTargets) pdTorques(m_, q_, v_, q_target_, v_target_, tau_);
     else passiveTorques(m_, v_, tau_);
     tau_ += tau_user_;
+    root_force_.setZero();
+    root_torque_.setZero();
+    if (servo_root) rootServoExplicit();
+    const Vec6<S>* root_k = servo_root ? &root_k_ : nullptr;
     const S hd = implicit_damping ? h : S(0);
     const bool with_kd = mode == ControlMode::PdTargets;
     if (contacts_enabled) {
@@ -131,21 +165,39 @@ class Simulator {
     }
     bool ok = true;
     passes_ = 0;
+    // A root servo block whose implicit part took it past its bound is re-solved as that bound
+    // alone (same contact assembly: one more ABA solve, only on such steps; at most two, as the
+    // re-solve of one block changes the other's implicit part).
+    auto bound_root_servo = [&] {
+      for (int k = 0; k < 2 && ok && servo_root && rootServoOverBound(hd); ++k) {
+        ok = abaSolve(m_, d_, tau_, qdd_, hd, with_kd, root_k);
+        ++passes_;
+      }
+    };
     if (nc_ == 0) {
       d_.has_ext = false;
-      ok = abaSolve(m_, d_, tau_, qdd_, hd, with_kd);
+      ok = abaSolve(m_, d_, tau_, qdd_, hd, with_kd, root_k);
       passes_ = 1;
+      bound_root_servo();
     } else {
       for (int pass = 0; pass < contact.max_passes; ++pass) {
         assembleContacts(m_, d_, contacts(), nc_, contact, h);
-        ok = abaSolve(m_, d_, tau_, qdd_, hd, with_kd);
+        ok = abaSolve(m_, d_, tau_, qdd_, hd, with_kd, root_k);
         ++passes_;
         if (!ok) break;
         if (!updateContactSet(m_, d_, contacts(), nc_, contact, h)) break;
       }
+      bound_root_servo();
       d_.has_ext = false;
     }
     if (!ok) return rollback(StepStatus::SolverFailure);
+    if (servo_root) {  // applied wrench: explicit part - h K_r qdd (body frame), to the world frame
+      const int k = m_.bodies[root_].v_index;
+      Vec6<S> w = root_w_;
+      for (int r = 0; r < 6; ++r) w(r) -= hd * root_k_(r) * qdd_(k + r);
+      root_torque_ = d_.R[root_] * w.template head<3>();
+      root_force_ = d_.R[root_] * w.template tail<3>();
+    }
     integrate(m_, q_, v_, qdd_, h);
     if (!q_.allFinite() || !v_.allFinite()) return rollback(StepStatus::NonFiniteResult);
     if (v_.cwiseAbs().maxCoeff() > velocity_limit) return rollback(StepStatus::VelocityLimit);
@@ -155,6 +207,53 @@ class Simulator {
 
  private:
   void refreshKinematics() { forwardKinematics(m_, d_, q_, &v_); }
+
+  // The root servo's explicit part (root_w_, body frame), added to tau_, and its implicit gains K_r.
+  void rootServoExplicit() {
+    const Body<S>& b = m_.bodies[root_];
+    const RootServo<S>& c = root_servo;
+    const Mat3<S>& R = d_.R[root_];
+    const Quat<S> Rt = readQuat<S>(q_target_, b.q_index + 3).normalized();
+    const Vec3<S> wt = Rt * Vec3<S>(v_target_.template segment<3>(b.v_index));
+    const Vec3<S> vt = Rt * Vec3<S>(v_target_.template segment<3>(b.v_index + 3));
+    const Vec3<S> w = R * Vec3<S>(v_.template segment<3>(b.v_index)), v = R * Vec3<S>(v_.template segment<3>(b.v_index + 3));
+    Vec3<S> F = c.kp_linear * (Vec3<S>(q_target_.template segment<3>(b.q_index)) - d_.p[root_]) + c.kd_linear * (vt - v);
+    Vec3<S> N = c.kp_angular * quatLog(Quat<S>(Rt * Quat<S>(R).conjugate())) + c.kd_angular * (wt - w);
+    // Saturated block: the bounded force alone (its implicit damping would add to the bound).
+    const S nf = F.norm(), nn = N.norm();
+    const S max_f = std::max(c.max_force, S(0)), max_n = std::max(c.max_torque, S(0));
+    const bool sat_f = !(nf <= max_f) || max_f == S(0), sat_n = !(nn <= max_n) || max_n == S(0);
+    if (sat_f) F = nf > max_f ? Vec3<S>(F * (max_f / nf)) : Vec3<S>::Zero();
+    if (sat_n) N = nn > max_n ? Vec3<S>(N * (max_n / nn)) : Vec3<S>::Zero();
+    root_w_.template head<3>() = R.transpose() * N;
+    root_w_.template tail<3>() = R.transpose() * F;
+    root_k_.template head<3>().setConstant(sat_n ? S(0) : c.kd_angular);
+    root_k_.template tail<3>().setConstant(sat_f ? S(0) : c.kd_linear);
+    tau_.template segment<6>(b.v_index) += root_w_;
+  }
+
+  // After a solve: the applied root wrench root_w_ - h K_r qdd per block (torque, force); a block
+  // over its bound becomes that bound in the applied direction, explicit (K_r block 0). True when
+  // something changed (the caller re-solves).
+  bool rootServoOverBound(S hd) {
+    const int k = m_.bodies[root_].v_index;
+    bool changed = false;
+    for (int blk = 0; blk < 2; ++blk) {
+      const S bound = blk == 0 ? root_servo.max_torque : root_servo.max_force;
+      const int o = 3 * blk;
+      if (root_k_(o) == S(0)) continue;  // saturated already: explicit, bounded
+      Vec3<S> w;
+      for (int r = 0; r < 3; ++r) w(r) = root_w_(o + r) - hd * root_k_(o + r) * qdd_(k + o + r);
+      const S n = w.norm();
+      if (!(n > bound)) continue;
+      const Vec3<S> wb = w * (bound / n);
+      tau_.template segment<3>(k + o) += wb - Vec3<S>(root_w_.template segment<3>(o));
+      root_w_.template segment<3>(o) = wb;
+      root_k_.template segment<3>(o).setZero();
+      changed = true;
+    }
+    return changed;
+  }
   StepStatus rollback(StepStatus s) {
     q_ = q_prev_;
     v_ = v_prev_;
@@ -172,6 +271,9 @@ class Simulator {
   std::array<std::array<Contact<S>, MaxContacts>, 2> contact_buffers_{};  // this step's, the previous step's
   int current_ = 0;
   int nc_ = 0, overflow_ = 0, passes_ = 0;
+  int root_ = -1;
+  Vec6<S> root_w_ = Vec6<S>::Zero(), root_k_ = Vec6<S>::Zero();  // root servo: explicit wrench, K_r
+  Vec3<S> root_force_ = Vec3<S>::Zero(), root_torque_ = Vec3<S>::Zero();
 };
 
 }  // namespace sparsebody::dynamics
