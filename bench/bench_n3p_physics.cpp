@@ -97,7 +97,7 @@ void BM_N3PPhysicsSimStep(benchmark::State& state) {
   long k = 0;
   for (auto _ : state) {
     if (++k % 60 == 0) f.sim.setState(f.q0, v0);  // stay standing on the floor
-    f.ctl.apply(f.m, f.sim.data(), 0.5f, f.tau);
+    f.ctl.apply(f.m, f.sim, 0.5f, f.tau);
     f.tc.apply(f.m, f.sim.data(), target, present, f.tau);
     f.sim.torques() = f.tau;
     benchmark::DoNotOptimize(f.sim.step(1.0f / 120));

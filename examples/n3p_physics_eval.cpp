@@ -15,6 +15,7 @@
 //   n3p_physics_eval FILE.json [--clips N] [--every K] [--no-shift] [--weights PREFIX]
 //     [--root-kp X] [--root-kd X] [--root-kr X] [--root-dr X] [--max-force N] [--max-torque NM]
 //     [--feedforward SCALE] [--correction-kp X] [--target-lead FRAMES] [--hold-targets 0|1]
+//     [--stance-support 0|1] [--distributed 0|1]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -81,8 +82,16 @@ int main(int argc, char** argv) {
         num("--root-dr", cc.root_dr) || num("--max-force", cc.max_force) || num("--max-torque", cc.max_torque) ||
         num("--feedforward", cc.feedforward_scale) || num("--correction-kp", cfg.correction.kp))
       continue;
-    double sup = 1;
+    double sup = 1, dist = 0;
     if (num("--stance-support", sup)) { cc.stance_support = sup != 0; continue; }
+    if (num("--support-moment", sup)) { cc.support_moment = sup != 0; continue; }
+    if (num("--velocity-targets", sup)) { cfg.velocity_targets = sup != 0; continue; }
+    if (num("--support-on-contact", sup)) { cfg.support_on_contact = sup != 0; continue; }
+    if (num("--acceleration", cc.acceleration_scale)) continue;
+    if (num("--distributed", dist)) {
+      cc.residual_mode = dist != 0 ? control::ResidualMode::Distributed : control::ResidualMode::RootServo;
+      continue;
+    }
     if (num("--target-lead", lead)) { cfg.target_lead = static_cast<int>(lead); continue; }
     if (num("--hold-targets", hold)) { cfg.per_frame_targets = hold == 0; continue; }
     if (!std::strcmp(argv[i], "--clips") && i + 1 < argc) max_clips = std::atoi(argv[++i]);

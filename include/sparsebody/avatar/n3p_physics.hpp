@@ -8,11 +8,11 @@
 //     -> every 3 frames (10 Hz, §6): a control step sets the PD targets, held until the next one:
 //          ControllerKind::Policy: the combined control predictor + learned policy pi
 //            (control/n3p_control_predictor.hpp), when policy weights are given;
-//          ControllerKind::ModelBased (default, no RL): targets = q_ref of the newest frame; with
-//            `per_frame_targets` (default) they are refreshed every frame to the reference
-//            `target_lead` frames ahead of the tracked one instead (no learned anticipation
-//            exists to make a 0.1 s hold useful); plus per frame an inverse-dynamics
-//            feed-forward and a bounded residual wrench (control/model_based_controller.hpp; its
+//          ControllerKind::ModelBased (default, no RL): targets = q_ref of the newest frame
+//            (held like the policy's; `per_frame_targets` refreshes them every frame instead:
+//            no better on the validation clips, see N3PPhysicsConfig); plus per frame velocity
+//            targets qd_ref, an inverse-dynamics feed-forward carried by the stance legs and a
+//            bounded residual wrench on the root (control/model_based_controller.hpp; its
 //            magnitude is reported every step: residual(), residual_stats());
 //     -> per substep: controller torques + tracker position correction (§6.2, Eq. (19),
 //        control/tracker_correction.hpp) -> Simulator::step(1/120)
@@ -64,10 +64,19 @@ struct N3PPhysicsConfig {
   control::TrackerCorrectionConfig correction{};  // kp 1000, kd 10 (§6.2)
   control::FallDetectorConfig fall{};
   int substeps = 4;                  // simulation steps per 30 Hz frame (120 Hz)
-  // Model-based controller only: PD targets refreshed every frame to the reference `target_lead`
-  // frames ahead of the frame being tracked, instead of held for 3 frames (the policy's 10 Hz).
-  bool per_frame_targets = true;
+  // Model-based controller only:
+  // - per_frame_targets: PD targets refreshed every frame to the reference `target_lead` frames
+  //   ahead of the frame being tracked, instead of held for 3 frames (the policy's 10 Hz, §7).
+  //   Off by default: on the validation clips holding gave MPJPE 10.88 cm / 254 falls, per-frame
+  //   refresh 10.96 cm / 246 falls (lead 1), 10.94 cm / 232 (lead 2): no gain worth leaving the paper.
+  // - velocity_targets: the servos' velocity targets qd* = the reference velocity (every frame),
+  //   so kd damps the lag behind the motion instead of the motion itself.
+  // - support_on_contact: stance support only for a foot the simulated character stands on
+  //   (share max(c, 0.5)), none for a foot in the air whatever the predicted contact c says.
+  bool per_frame_targets = false;
   int target_lead = 1;
+  bool velocity_targets = true;
+  bool support_on_contact = true;
   double max_reference_jump = 0.5;   // m per frame of the reference root; more restarts the physics
 };
 
@@ -271,17 +280,22 @@ class N3PPhysicsPipeline {
     sim_frame_ = F - first_;
     const S dt = S(1.0 / 30), h = dt / S(cfg_.substeps);
     const auto& hd = hands_[slot(F)];
-    controller_.set_reference(model_, ref_at(F - 2), ref_at(F - 1), ref_at(F), dt, hd.contact);
+    double support[2] = {hd.contact[0], hd.contact[1]};
+    if (cfg_.support_on_contact)  // stance support only for a foot the simulated character stands on
+      for (int s = 0; s < 2; ++s) support[s] = contact(s) ? std::max(support[s], 0.5) : 0.0;
+    controller_.set_reference(model_, ref_at(F - 2), ref_at(F - 1), ref_at(F), dt, support);
     if (cfg_.per_frame_targets && !control_) sim_.targets() = ref_at(F + cfg_.target_lead);
+    if (!control_ && cfg_.velocity_targets) sim_.targetVelocities() = controller_.reference_velocity();
     out_time_ = hd.time;
     const bool policy = control_ != nullptr;
     for (int k = 0; k < cfg_.substeps; ++k) {
       const S alpha = S(k + 1) / S(cfg_.substeps);
       if (policy) {
         tau_.setZero();
+        sim_.root_servo.enabled = false;
         residual_ = {};
       } else {
-        residual_ = controller_.apply(model_, sim_.data(), alpha, tau_);
+        controller_.apply(model_, sim_, alpha, tau_);
       }
       correction_.apply(model_, sim_.data(), hd.p, hd.present, tau_);
       sim_.torques() = tau_;
@@ -290,6 +304,7 @@ class N3PPhysicsPipeline {
         reset_character(F);
         break;
       }
+      if (!policy) residual_ = controller_.residual_applied(sim_);
       stats_.force_sum += residual_.force;
       stats_.torque_sum += residual_.torque;
       stats_.force_max = std::max(stats_.force_max, residual_.force);
