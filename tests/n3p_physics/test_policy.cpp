@@ -5,10 +5,12 @@
 // generated at test time with ${SPARSEBODY_PYTHON} into the build directory.
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <random>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -130,4 +132,73 @@ TEST_CASE("n3p physics policy path: runs, recovers from falls, no allocation per
   bool s_finite = true;
   for (float x : s) s_finite &= std::isfinite(x);
   CHECK(s_finite);
+}
+
+// §6 "apply IK to the trackers": in the rollout states the policy sees (2, 5, 8: frames t, t+3,
+// t+6), each hand joint is on its controller (received at t, forecast by Eq. (18) after it) unless
+// out of the arm's reach, where the arm is straight towards it; without the IK it is not.
+TEST_CASE("n3p control predictor: the rollout's hands are put on the trackers by IK") {
+  using Physics = avatar::N3PPhysicsPipeline<float, 64, 128, 128>;
+  const std::string dir = std::string(SPARSEBODY_BINARY_DIR) + "/n3p_physics_reference";
+  std::ifstream probe(dir + "/n3p_policy_random.json");
+  REQUIRE_MESSAGE(probe.good(), "run the parity test case first (it writes the random policy)");
+  const auto w = Physics::load(SPARSEBODY_N3P_WEIGHTS);
+  const auto policy = Physics::ControlPredictor::load_policy(dir + "/n3p_policy_random.json");
+  Physics with(w, policy), without(w, policy);
+  without.control_predictor()->tracker_ik = false;
+  auto frame = [](int t) {  // walking forward, hands swinging in front of the hips
+    trackers::TrackerFrame f;
+    f.time = t / 30.0;
+    const double x = 1.0 * t / 30.0, swing = 0.15 * std::sin(2 * M_PI * t / 30.0);
+    const Eigen::Vector3d pos[3] = {Eigen::Vector3d(0, 1.378, x), Eigen::Vector3d(0.22, 0.9, x + swing + 0.1),
+                                    Eigen::Vector3d(-0.22, 0.9, x - swing + 0.1)};
+    for (int k = 0; k < 3; ++k) {
+      f.pose[k].position = trackers::to_xr(pos[k]);
+      f.pose[k].orientation = trackers::to_xr(Eigen::Quaterniond::Identity());
+      f.valid[k] = true;
+    }
+    return f;
+  };
+  std::vector<std::array<Eigen::Vector3d, 2>> hands;  // calibrated controller positions per frame
+  double err_with = 0, err_without = 0, worst_reached = 0;
+  int checked = 0, reached = 0;
+  long long steps = 0;
+  for (int t = 0; t < 120; ++t) {
+    with.push(frame(t));
+    without.push(frame(t));
+    hands.push_back({with.direct().trackers()[1].p, with.direct().trackers()[2].p});
+    if (with.policy_steps() == steps) continue;  // no control step this frame
+    steps = with.policy_steps();
+    REQUIRE(without.policy_steps() == steps);
+    const auto* a = with.control_predictor();
+    const auto* b = without.control_predictor();
+    const int n = static_cast<int>(hands.size()) - 1;
+    for (int side = 0; side < 2; ++side) {
+      const Eigen::Vector3d delta = 0.5 * (hands[n][side] - hands[n - 2][side]);  // Eq. (18) average offset
+      for (int k : {2, 5, 8}) {
+        const Eigen::Vector3d target = hands[n][side] + double(k - 2) * delta;
+        const int sh = a->arm_joint(side, 0), el = a->arm_joint(side, 1), hd = a->arm_joint(side, 2);
+        const Eigen::Vector3d s = a->rollout_upper_position(k, sh), e = a->rollout_upper_position(k, el),
+                              h = a->rollout_upper_position(k, hd);
+        const double e_ik = (h - target).norm();
+        err_with += e_ik;
+        err_without += (b->rollout_upper_position(k, hd) - target).norm();
+        ++checked;
+        const double reach = (e - s).norm() + (h - e).norm();
+        if ((target - s).norm() < reach - 1e-3) {  // reachable: on the target
+          ++reached;
+          worst_reached = std::max(worst_reached, e_ik);
+        } else {  // out of reach: straight arm pointing at it
+          CHECK((h - s).norm() == doctest::Approx(reach).epsilon(1e-3));
+          CHECK((h - s).normalized().dot((target - s).normalized()) > 0.999);
+        }
+      }
+    }
+  }
+  std::printf("[n3p-ik] %d rollout hands: mean error to the controller %.4f m with IK, %.4f m without; %d reachable, worst %.2e m\n",
+              checked, err_with / std::max(1, checked), err_without / std::max(1, checked), reached, worst_reached);
+  CHECK(checked >= 6 * 30);
+  CHECK(reached > checked / 2);
+  CHECK(worst_reached < 1e-4);  // float storage of g
+  CHECK(err_without / checked > 0.02);  // the network alone does not put them there
 }

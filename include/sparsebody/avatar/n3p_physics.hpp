@@ -198,6 +198,7 @@ class N3PPhysicsPipeline {
   long long restarts() const noexcept { return restarts_; }      // physics (re)starts
   ControllerKind controller_kind() const noexcept { return control_ ? ControllerKind::Policy : ControllerKind::ModelBased; }
   const ControlPredictor* control_predictor() const noexcept { return control_.get(); }
+  ControlPredictor* control_predictor() noexcept { return control_.get(); }  // e.g. its tracker_ik switch
   long long policy_steps() const noexcept { return policy_steps_; }  // control steps the policy set the targets
 
   const Direct& direct() const noexcept { return direct_; }  // the reference (direct mode, no delay)

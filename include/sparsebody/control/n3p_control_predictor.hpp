@@ -12,23 +12,31 @@
 //      next control step), then over 6 forecast frames t+1 .. t+6 (Eq. (18): o^t = delta_o + o^{t-1},
 //      delta_o the average offset between consecutive received frames; applied to the positions,
 //      orientations held): 9 predicted states;
-//   3. s = {x_t, g_t+1, g_t+2, g_t+3} (control/n3p_policy_input.hpp) in h_ref = h^{t-3}, with
+//   3. IK to the trackers (§6, "in the way similar to [ZSKS18]"): in each predicted state the policy
+//      sees, each arm (UpperArm -> LowerArm -> Hand) is put on its controller (received or
+//      forecast, Eq. (18)) by the analytic two-bone IK of direct mode (pose/ik.hpp): the hand
+//      joint goes to the controller position (clamped to the arm's reach), the elbow stays in
+//      the predicted bend plane; UpperArm and LowerArm rotations are swung to the new bones, the
+//      hand keeps its predicted orientation, velocities stay as predicted. A controller that is
+//      not present (o* substituted) is not a target. The IK edits the copies that go into s, not
+//      the predictor's own state (the autoregressive rollout stays the network's);
+//   4. s = {x_t, g_t+1, g_t+2, g_t+3} (control/n3p_policy_input.hpp) in h_ref = h^{t-3}, with
 //      g_t+k the predictions 3k frames after the simulation time (frames t, t+3, t+6);
-//   4. u = pi(s): target local rotations of the 20 internal joints -> PD targets (q layout) through
+//   5. u = pi(s): target local rotations of the 20 internal joints -> PD targets (q layout) through
 //      control/n3p_sim_retarget.hpp, held for the next 12 simulation steps.
-// Not done here (see the report): the paper's IK of the predicted clip to the trackers (§6, "in
-// the way similar to [ZSKS18]"); the rollout uses the predictor output as is.
 // Per control step: no allocation, no exception (a non-finite policy output keeps the previous
 // targets and returns false).
 #pragma once
 #include <array>
 #include <memory>
+#include <string>
 
 #include "sparsebody/avatar/n3p_predictor.hpp"
 #include "sparsebody/control/n3p_policy_input.hpp"
 #include "sparsebody/control/n3p_sim_retarget.hpp"
 #include "sparsebody/dynamics/kinematics.hpp"
 #include "sparsebody/networks/policy_nets.hpp"
+#include "sparsebody/pose/ik.hpp"
 
 namespace sparsebody::control {
 
@@ -50,8 +58,18 @@ class N3PControlPredictor {
   N3PControlPredictor(const typename Predictor::Weights& w, std::shared_ptr<const PolicyWeights> policy)
       : pred_(w), pi_(std::move(policy)) {
     pose_.resize(pred_.skeleton().size());
+    const char* arm[2][3] = {{"UpperArm_L", "LowerArm_L", "Hand_L"}, {"UpperArm_R", "LowerArm_R", "Hand_R"}};
+    for (int side = 0; side < 2; ++side)
+      for (int c = 0; c < 3; ++c) {
+        arm_[side][c] = -1;
+        for (int i = 0; i < features::n3p::kUpperJoints; ++i)
+          if (std::string(features::n3p::kUpperNames[i]) == arm[side][c]) arm_[side][c] = i;
+      }
     reset();
   }
+
+  // IK of the rollout's arms to the trackers (step 3); on by default.
+  bool tracker_ik = true;
 
   void reset() noexcept {
     pred_.reset();
@@ -122,6 +140,7 @@ class N3PControlPredictor {
       rollout_h_[k] = pred_.heading();
       std::copy(pred_.g_lo(), pred_.g_lo() + n3p::kGlo, rollout_glo_[k].begin());
       std::copy(pred_.g_up(), pred_.g_up() + n3p::kGup, rollout_gup_[k].begin());
+      if (tracker_ik && k % 3 == 2) arms_to_trackers(rollout_h_[k], x, pr, rollout_gup_[k]);  // the states s uses
     }
     // 3. s in h_ref: x_t, then the predictions 3, 6, 9 frames after the simulation time.
     n3p_policy::character_block(href, p_.data(), v_.data(), R_.data(), s_.data());
@@ -147,10 +166,50 @@ class N3PControlPredictor {
   }
 
   const std::array<T, n3p_policy::kPolicyIn>& policy_input() const noexcept { return s_; }
+  // Rollout state k (0..8) of the last control step: heading and g_up (after the IK for k = 2, 5, 8).
+  const features::HeadingFrame& rollout_heading(int k) const noexcept { return rollout_h_[k]; }
+  const std::array<T, features::n3p::kGup>& rollout_g_up(int k) const noexcept { return rollout_gup_[k]; }
+  // World position of upper joint i (J_up order) in rollout state k.
+  Eigen::Vector3d rollout_upper_position(int k, int i) const noexcept {
+    const T* p = rollout_gup_[k].data() + features::n3p::UpperBlock::pos(i);
+    return rollout_h_[k].point_to_world(Eigen::Vector3d(double(p[0]), double(p[1]), double(p[2])));
+  }
+  // Index in J_up of UpperArm, LowerArm, Hand (c = 0, 1, 2) of an arm (side 0 left, 1 right).
+  int arm_joint(int side, int c) const noexcept { return arm_[side][c]; }
   const Predictor& predictor() const noexcept { return pred_; }
 
  private:
   using Snapshot = typename Predictor::Snapshot;
+
+  // Step 3: two-bone IK of each present controller's arm in g (heading h), as direct mode's limb_to.
+  void arms_to_trackers(const features::HeadingFrame& h, const features::n3p::TrackerSet& x, const std::array<bool, 3>& present,
+                        std::array<T, features::n3p::kGup>& g) const noexcept {
+    using B = features::n3p::UpperBlock;
+    for (int side = 0; side < 2; ++side) {
+      if (!present[1 + side] || arm_[side][0] < 0 || arm_[side][1] < 0 || arm_[side][2] < 0) continue;
+      const Eigen::Vector3d target = h.point_to_local(x[1 + side].p);
+      if (!target.allFinite()) continue;
+      Eigen::Vector3d p[3];
+      Eigen::Matrix3d R[2];
+      for (int c = 0; c < 3; ++c) {
+        const T* q = g.data() + B::pos(arm_[side][c]);
+        p[c] = Eigen::Vector3d(double(q[0]), double(q[1]), double(q[2]));
+      }
+      for (int c = 0; c < 2; ++c) R[c] = pose::from6d(g.data() + B::rot(arm_[side][c]));
+      Eigen::Vector3d nb, nc;
+      pose::two_bone(p[0], p[1], p[2], target, p[1] - p[0], nb, nc);
+      const Eigen::Quaterniond s1 = pose::swing(p[1] - p[0], nb - p[0]);
+      const Eigen::Matrix3d Ra = s1.toRotationMatrix() * R[0];
+      const Eigen::Matrix3d Rb = (pose::swing(s1 * (p[2] - p[1]), nc - nb) * s1).toRotationMatrix() * R[1];
+      if (!nb.allFinite() || !nc.allFinite() || !Ra.allFinite() || !Rb.allFinite()) continue;
+      for (int a = 0; a < 3; ++a) {
+        g[B::pos(arm_[side][1]) + a] = static_cast<T>(nb[a]);
+        g[B::pos(arm_[side][2]) + a] = static_cast<T>(nc[a]);
+      }
+      pose::to6d<T>(Ra, g.data() + B::rot(arm_[side][0]));
+      pose::to6d<T>(Rb, g.data() + B::rot(arm_[side][1]));
+    }
+  }
   Predictor pred_;
   nn::Network<PolicyNet> pi_;
   Snapshot committed_, work_;
@@ -165,6 +224,7 @@ class N3PControlPredictor {
   std::array<T, n3p_policy::kPolicyIn> s_{};
   pose::BodyPose pose_;
   VecQ q_tmp_;
+  int arm_[2][3] = {};  // J_up index of UpperArm, LowerArm, Hand per side
 };
 
 }  // namespace sparsebody::control
