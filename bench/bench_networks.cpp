@@ -1,10 +1,15 @@
 // Per-step latency of the papers' networks (float, one instance, random weights), each with the
 // weight bytes it streams per step and the achieved bandwidth, against
 //  - LibTorch (same network, one thread, inference mode) when built with it, and
-//  - a plain SIMD read of the same number of bytes: the memory-bandwidth floor for these sizes.
+//  - a plain SIMD read of the same number of bytes: the memory-bandwidth floor for these sizes, and
+//  - "paired/": each float network step interleaved with a plain read of its own weight buffers
+//    (the robust step/read ratio on a noisy machine).
 // Run: build/bench/bench_networks --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include <algorithm>
+#include <chrono>
 #include <random>
 #include <string>
+#include <vector>
 
 #include <benchmark/benchmark.h>
 
@@ -126,6 +131,70 @@ void BM_WeightRead(benchmark::State& st) {
                                            benchmark::Counter::OneK::kIs1000);
 }
 
+// Plain read of `bytes` at p with aligned SIMD loads into 8 independent accumulators (p is
+// cache-line aligned, as every weight buffer is).
+inline float plain_read(const float* p, std::size_t n) {
+  using B = nn::Batch<float>;
+  constexpr std::size_t L = nn::kLanes<float>;
+  B acc[8] = {B(0.f), B(0.f), B(0.f), B(0.f), B(0.f), B(0.f), B(0.f), B(0.f)};
+  std::size_t i = 0;
+  for (; i + 8 * L <= n; i += 8 * L)
+    for (int k = 0; k < 8; ++k) acc[k] += B::load_aligned(p + i + k * L);
+  float s = 0;
+  for (; i < n; ++i) s += p[i];
+  for (int k = 0; k < 8; ++k) s += xsimd::hadd(acc[k]);
+  return s;
+}
+
+// The ratio "step / plain read of its weights", measured robustly on a noisy shared machine: every
+// iteration times one network step and then one plain read of the network's *own* weight buffers
+// (the same bytes at the same addresses, so both see the same cache state), and the counters are
+// the medians of the per-iteration times. Separate benchmarks of the two drift apart by up to 20 %
+// here when the shared L3 / memory bandwidth changes between them.
+template <class Net>
+void bench_paired(benchmark::State& st, io::TensorTable table, const char* kind) {
+  using Clock = std::chrono::steady_clock;
+  auto w = make_weights<Net>(std::move(table), kind);
+  nn::Network<Net> net(w);
+  std::vector<std::pair<const float*, std::size_t>> bufs;
+  w->store().for_each_buffer([&](const void* p, std::size_t bytes) {
+    bufs.emplace_back(static_cast<const float*>(p), bytes / sizeof(float));
+  });
+  std::vector<float> x(Net::in_size);
+  std::mt19937 rng(4);
+  std::normal_distribution<float> d(0, 1);
+  for (auto& v : x) v = d(rng);
+  constexpr std::size_t kMaxSamples = 1 << 18;
+  std::vector<double> t_step, t_read;
+  t_step.reserve(kMaxSamples);
+  t_read.reserve(kMaxSamples);
+  for (auto _ : st) {
+    const auto a = Clock::now();
+    const float* y = net.step(x.data());
+    benchmark::DoNotOptimize(y);
+    benchmark::ClobberMemory();
+    const auto b = Clock::now();
+    float s = 0;
+    for (const auto& [p, n] : bufs) s += plain_read(p, n);
+    benchmark::DoNotOptimize(s);
+    const auto c = Clock::now();
+    if (t_step.size() < kMaxSamples) {
+      t_step.push_back(std::chrono::duration<double, std::micro>(b - a).count());
+      t_read.push_back(std::chrono::duration<double, std::micro>(c - b).count());
+    }
+  }
+  auto median = [](std::vector<double>& v) {
+    if (v.empty()) return 0.0;
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  const double ms = median(t_step), mr = median(t_read);
+  st.counters["step_us"] = ms;
+  st.counters["read_us"] = mr;
+  st.counters["step/read"] = mr > 0 ? ms / mr : 0;
+  st.counters["weight_bytes"] = double(w->bytes());
+}
+
 // Loading the paper-size LoBSTr model (37->1024 GRU, 13 MB of float32) from weights JSON text.
 void BM_LoadLoBSTr1024(benchmark::State& st) {
   const bool base64 = st.range(0) == 1;
@@ -195,6 +264,19 @@ void register_all() {
   SB_NET("N3P_policy_868_256_256_72_q8weights", N3PPolicyQ8, mlp_table({868, 256, 256, 72}), "n3p_policy")
   SB_NET("QuestSim_475_400_300_200_33_q8weights", QuestSimQ8, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
 #undef SB_NET
+  // Step and plain read of its own weights, interleaved (see bench_paired): the robust ratio.
+#define SB_PAIRED(NAME, NET, TABLE, KIND) \
+  reg("paired/" NAME, [](benchmark::State& s) { bench_paired<NET>(s, TABLE, KIND); });
+  SB_PAIRED("GRU_37x1024", GruOnly<1024>, lobstr_table(1024, 0, true), "gru")
+  SB_PAIRED("GRU_37x256", GruOnly<256>, lobstr_table(256, 0, true), "gru")
+  SB_PAIRED("LoBSTr_H1024", LoBSTr<1024>, lobstr_table(1024, kLatent), "lobstr")
+  SB_PAIRED("LoBSTr_H256", LoBSTr<256>, lobstr_table(256, kLatent), "lobstr")
+  SB_PAIRED("N3P_Gsig_H64", Gsig, n3p_table(45, 64, 12), "n3p_signal")
+  SB_PAIRED("N3P_Glo_H128", Glo, n3p_table(12, 128, 113), "n3p_lower")
+  SB_PAIRED("N3P_Gup_H128", Gup, n3p_table(45, 128, 201), "n3p_upper")
+  SB_PAIRED("N3P_policy_868_256_256_72", N3PPolicy, mlp_table({868, 256, 256, 72}), "n3p_policy")
+  SB_PAIRED("QuestSim_475_400_300_200_33", QuestSim, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
+#undef SB_PAIRED
   add_ratio("GRU_37x1024 f16 weights / plain read of its float weights", "sparsebody/GRU_37x1024_f16weights",
             "read/" + std::to_string(entries[0].weight_bytes) + "B/" + std::to_string(entries[0].weight_bytes));
   add_ratio("LoBSTr_H1024 f16 weights / plain read of its float weights", "sparsebody/LoBSTr_H1024_f16weights",

@@ -57,6 +57,7 @@ class NetworkWeights {
   const io::ModelInfo& info() const noexcept { return info_; }
   // Parameter bytes one step streams (the memory-traffic floor of a step).
   std::size_t bytes() const noexcept { return store_.bytes(); }
+  const WeightStore<T>& store() const noexcept { return store_; }
   const T* input_mean() const noexcept { return in_mean_; }
   const T* input_inv_std() const noexcept { return in_inv_std_; }
   const T* output_mean() const noexcept { return out_mean_; }

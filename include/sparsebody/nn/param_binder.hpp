@@ -28,6 +28,12 @@ class WeightStore {
   }
   // Bytes of parameters (including SIMD padding) one forward pass streams.
   std::size_t bytes() const noexcept { return bytes_; }
+  // Calls f(data, bytes) for every buffer, in allocation order (benchmarks stream the same bytes
+  // with a plain read to measure the memory floor of a step).
+  template <class F>
+  void for_each_buffer(F&& f) const {
+    for (const auto& b : buffers_) f(static_cast<const void*>(b.data()), b.size() * sizeof(T));
+  }
 
  private:
   std::vector<AlignedBuffer<T>> buffers_;
