@@ -85,6 +85,9 @@ int main(int argc, char** argv) {
     double sup = 1, dist = 0;
     if (num("--stance-support", sup)) { cc.stance_support = sup != 0; continue; }
     if (num("--support-moment", sup)) { cc.support_moment = sup != 0; continue; }
+    if (num("--support-at-state", sup)) { cc.support_at_state = sup != 0; continue; }
+    if (num("--ground-reference", sup)) { cc.ground_reference = sup != 0; continue; }
+    if (num("--ground-resets", sup)) { cfg.ground_resets = sup != 0; continue; }
     if (num("--velocity-targets", sup)) { cfg.velocity_targets = sup != 0; continue; }
     if (num("--support-on-contact", sup)) { cfg.support_on_contact = sup != 0; continue; }
     if (num("--acceleration", cc.acceleration_scale)) continue;

@@ -158,8 +158,14 @@ TEST_CASE("n3p physics: a fall resets the character to the predicted pose and th
     p.push(user_frame(t, 1.0));
     if (!p.has_output()) continue;
     ++frames;
-    // Reset: the state is the reference of the frame being tracked.
-    CHECK((p.simulator().q() - p.reference()).cwiseAbs().maxCoeff() < 1e-5);
+    // Reset: the state is the reference of the frame being tracked, lifted out of the floor
+    // (ground_resets): only the root height differs, by what puts the lowest point on the floor.
+    Physics::VecQ dq = p.simulator().q() - p.reference();
+    CHECK(dq(1) >= 0);
+    CHECK(dq(1) <= p.config().controller.max_ground_lift + 1e-6);
+    dq(1) = 0;
+    CHECK(dq.cwiseAbs().maxCoeff() < 1e-5);
+    CHECK(p.penetration() < 1e-5);
     REQUIRE(finite_output(p));
   }
   CHECK(p.falls() == frames);
@@ -202,4 +208,25 @@ TEST_CASE("n3p physics: NaN, lost trackers and jumps give finite output and defi
   }
   CHECK(p.restarts() > restarts);  // the jump restarted the physics on the new reference
   CHECK(p.sim_failures() == 0);
+}
+
+TEST_CASE("n3p physics: ground_lift is how far the lowest contact point is below the floor") {
+  Physics p(n3p_physics_test::weights());
+  const auto& m = p.model();
+  control::ModelBasedController<float, 24, 72> ctl(m);
+  Physics::VecQ q = m.neutralConfiguration();
+  dynamics::Data<float, 24, 72> d(m);
+  auto lowest = [&](const Physics::VecQ& x) {
+    dynamics::forwardKinematics(m, d, x, static_cast<const Physics::VecV*>(nullptr), true);
+    float lo = 1e9f;
+    for (int k = 0; k < m.num_points; ++k)
+      lo = std::min(lo, dynamics::pointPosition(d, m.points[k].body, m.points[k].pos).y() - m.points[k].radius);
+    return lo;
+  };
+  q(1) += 0.3f - lowest(q);  // lowest point 0.3 m up: nothing to lift
+  CHECK(ctl.ground_lift(m, q) == 0);
+  q(1) -= 0.34f;  // 4 cm into the floor
+  CHECK(ctl.ground_lift(m, q) == doctest::Approx(0.04).epsilon(1e-4));
+  q(1) -= 1.0f;  // bounded
+  CHECK(ctl.ground_lift(m, q) == doctest::Approx(ctl.config().max_ground_lift));
 }
