@@ -8,9 +8,10 @@
 //     -> every 3 frames (10 Hz, §6): a control step sets the PD targets, held until the next one:
 //          ControllerKind::Policy: the combined control predictor + learned policy pi
 //            (control/n3p_control_predictor.hpp), when policy weights are given;
-//          ControllerKind::ModelBased (default, no RL): targets = q_ref of the newest frame
-//            (held like the policy's; `per_frame_targets` refreshes them every frame instead:
-//            no better on the validation clips, see N3PPhysicsConfig); plus per frame velocity
+//          ControllerKind::ModelBased (default, no RL): targets = q_ref of the newest frame,
+//            held like the policy's with per_frame_targets = false; by default (measured better,
+//            see N3PPhysicsConfig) refreshed every frame to the reference 2 frames ahead of the
+//            tracked one instead; plus per frame velocity
 //            targets qd_ref, an inverse-dynamics feed-forward carried by the stance legs and a
 //            bounded residual wrench on the root (control/model_based_controller.hpp; its
 //            magnitude is reported every step: residual(), residual_stats());
@@ -67,8 +68,9 @@ struct N3PPhysicsConfig {
   // Model-based controller only:
   // - per_frame_targets: PD targets refreshed every frame to the reference `target_lead` frames
   //   ahead of the frame being tracked, instead of held for 3 frames (the policy's 10 Hz, §7).
-  //   Off by default: on the validation clips holding gave MPJPE 10.88 cm / 254 falls, per-frame
-  //   refresh 10.96 cm / 246 falls (lead 1), 10.94 cm / 232 (lead 2): no gain worth leaving the paper.
+  //   Chosen by measurement (validation, 3-point, delay removed): per frame with lead 2: MPJPE
+  //   9.53 cm, 118 falls, skating 26.3 cm/s; lead 1: 9.63 cm, 137, 27.3; held (the newest
+  //   reference, 1-3 frames ahead): 9.59 cm, 130, 26.6. `--hold-targets 1` in the evaluation.
   // - velocity_targets: the servos' velocity targets qd* = the reference velocity (every frame),
   //   so kd damps the lag behind the motion instead of the motion itself.
   // - ground_resets: a (re)start or fall reset puts the character on the reference lifted out of
@@ -77,8 +79,8 @@ struct N3PPhysicsConfig {
   // - support_on_contact: the stance support's share of a foot is its predicted contact c only
   //   while the simulated foot touches the ground, 0 in the air (validation: falls 566 -> 212 with
   //   the rest; flooring the share of a touching foot at 0.5 gave 254, ungated c 328).
-  bool per_frame_targets = false;
-  int target_lead = 1;
+  bool per_frame_targets = true;
+  int target_lead = 2;
   bool velocity_targets = true;
   bool support_on_contact = true;
   bool ground_resets = true;

@@ -1,9 +1,10 @@
 // The default controller of the Neural3Points physics mode: it needs no trained policy (RL policies
 // are not shipped) and stands in for the control policy pi of §5. Three parts, per simulation step:
 //
-//   1. PD targets  u = the predicted pose (q* of every internal joint), held until the next control
-//      step like the policy's output (avatar/n3p_physics.hpp); the simulator's servos (kp = 200,
-//      kd = 20, implicit damping) turn it into torques, with velocity targets qd* = qd_ref.
+//   1. PD targets  u = the predicted pose (q* of every internal joint), refreshed per frame or held
+//      until the next control step like the policy's output (avatar/n3p_physics.hpp,
+//      N3PPhysicsConfig::per_frame_targets); the simulator's servos (kp = 200, kd = 20, implicit
+//      damping) turn it into torques, with velocity targets qd* = qd_ref.
 //   2. Feed-forward  tau_ff = RNEA(q_ref, qd_ref, qdd_ref), internal joints only, with qd_ref and
 //      qdd_ref finite-differenced from the predicted 30 Hz poses. It removes the servo's steady
 //      error under gravity and inertia (a PD servo alone sags by tau / kp). RNEA alone holds the
@@ -32,11 +33,11 @@
 // lifted out of the floor (ground_reference, ground_lift(): the predicted pose put on the avatar's
 // feet is 4.5 cm in the floor on average, and a root servo toward it pulls the body down on the
 // feet it stands on).
-// Validation clips (301, 3-point, `n3p_physics_eval`, each flag of the defaults turned off in turn:
-// README, Neural3Points physics mode): falls 0.43 -> 0.11 per second, MPJPE 12.29 -> 10.03 cm
+// Validation clips (301, 3-point, `n3p_physics_eval`; each part of the defaults turned off in turn
+// in the README, Neural3Points physics mode): falls 0.43 -> 0.09 per second, MPJPE 12.29 -> 9.53 cm
 // (delay removed) against the former default (Distributed, no stance support, no velocity targets,
-// reference in the floor, per-frame targets). The stance support is most of it (without: 0.30 /s).
-// ResidualMode::Distributed with the same rest: 0.11 /s, 10.55 cm.
+// no acceleration feed-forward, reference in the floor). The stance support with its moment is
+// most of it (without: 0.28 / s); ResidualMode::Distributed with the same rest: 0.11 / s, 10.31 cm.
 // Per step: no allocation, no exception.
 #pragma once
 #include <algorithm>
@@ -74,9 +75,10 @@ struct ModelBasedControllerConfig {
   bool support_moment = true;      // ... its moment too, not only its force
   bool support_at_state = false;   // ... through the legs' Jacobians at the simulated state, per step
                                    // (validation: MPJPE 10.70 -> 10.18 cm but falls 226 -> 307)
-  double acceleration_scale = 0.0; // weight of the finite-differenced qdd_ref in RNEA (0: gravity,
-                                   // Coriolis and support only; 30 Hz second differences are noisy:
-                                   // 1 raised foot skating 29 -> 45 cm/s and falls)
+  double acceleration_scale = 0.5; // weight of the finite-differenced qdd_ref in RNEA (30 Hz second
+                                   // differences are noisy; validation: 0 / 0.3 / 0.5 / 0.7 / 1 gave
+                                   // MPJPE 10.03 / 9.82 / 9.59 / 9.54 / 9.83 cm, falls 143 / 138 /
+                                   // 130 / 146 / 151, skating 28.7 / 27.1 / 26.6 / 29.0 / 33.7 cm/s)
 };
 
 // Size of the residual wrench of the last step (N, N m).
