@@ -125,6 +125,8 @@ class ModelBasedController {
   // and the foot contact weights (c_L, c_R) of the stance support (the pipeline passes the predicted
   // probabilities, gated by the simulated contacts). Computes qd_ref, qdd_ref, tau_ff and
   // the root reference the next substeps track.
+  // (After a (re)start the pipeline repeats the start pose for the missing frames: the reference
+  // then accelerates from rest, as the character, placed at rest, does.)
   void set_reference(const ModelT& m, const VecQ& q_prev2, const VecQ& q_prev, const VecQ& q, S dt,
                      const double (&contact)[2]) noexcept {
     N3PSimRetarget<S, MB, MD>::velocity(m, q_prev, q, dt, v1_);
