@@ -15,7 +15,14 @@
 //   n3p_physics_eval FILE.json [--clips N] [--every K] [--no-shift] [--weights PREFIX]
 //     [--root-kp X] [--root-kd X] [--root-kr X] [--root-dr X] [--max-force N] [--max-torque NM]
 //     [--feedforward SCALE] [--correction-kp X] [--target-lead FRAMES] [--hold-targets 0|1]
-//     [--stance-support 0|1] [--distributed 0|1]
+//     [--stance-support 0|1] [--support-moment 0|1] [--support-at-state 0|1] [--support-on-contact 0|1]
+//     [--velocity-targets 0|1] [--acceleration SCALE] [--ground-reference 0|1] [--ground-resets 0|1]
+//     [--distributed 0|1]
+// (each overrides one field of N3PPhysicsConfig / ModelBasedControllerConfig; the README's table of
+// the default with each part turned off is made with them).
+// The former default (before 2026-12-01): --distributed 1 --root-kp 2000 --root-kd 200 --root-kr 1000
+//   --root-dr 100 --stance-support 0 --velocity-targets 0 --support-on-contact 0 --ground-reference 0
+//   --ground-resets 0 --acceleration 0 --target-lead 1
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
