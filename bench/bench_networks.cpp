@@ -2,11 +2,13 @@
 // weight bytes it streams per step and the achieved bandwidth, against
 //  - LibTorch (same network, one thread, inference mode) when built with it, and
 //  - a plain SIMD read of the same number of bytes: the memory-bandwidth floor for these sizes, and
-//  - "paired/": each float network step interleaved with a plain read of its own weight buffers
-//    (the robust step/read ratio on a noisy machine).
+//  - "paired/": each network step interleaved with a plain read of its own weight buffers (the
+//    robust step/read ratio on a noisy machine).
 // Run: build/bench/bench_networks --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
+#include <cstring>
 #include <random>
 #include <string>
 #include <vector>
@@ -131,18 +133,25 @@ void BM_WeightRead(benchmark::State& st) {
                                            benchmark::Counter::OneK::kIs1000);
 }
 
-// Plain read of `bytes` at p with aligned SIMD loads into 8 independent accumulators (p is
-// cache-line aligned, as every weight buffer is).
+// Plain read of n floats' worth of bytes at p with aligned SIMD loads into 8 independent
+// accumulators (p is cache-line aligned, as every weight buffer is). Bitwise OR, not addition: the
+// buffers of f16 / int8 storage read as floats may hold NaN or denormal patterns.
 inline float plain_read(const float* p, std::size_t n) {
   using B = nn::Batch<float>;
   constexpr std::size_t L = nn::kLanes<float>;
   B acc[8] = {B(0.f), B(0.f), B(0.f), B(0.f), B(0.f), B(0.f), B(0.f), B(0.f)};
   std::size_t i = 0;
   for (; i + 8 * L <= n; i += 8 * L)
-    for (int k = 0; k < 8; ++k) acc[k] += B::load_aligned(p + i + k * L);
-  float s = 0;
-  for (; i < n; ++i) s += p[i];
-  for (int k = 0; k < 8; ++k) s += xsimd::hadd(acc[k]);
+    for (int k = 0; k < 8; ++k) acc[k] = acc[k] | B::load_aligned(p + i + k * L);
+  for (; i + L <= n; i += L) acc[0] = acc[0] | B::load_aligned(p + i);
+  for (int k = 1; k < 8; ++k) acc[0] = acc[0] | acc[k];
+  alignas(64) float lanes[L];
+  acc[0].store_aligned(lanes);
+  std::uint32_t bits = 0, b = 0;
+  for (std::size_t k = 0; k < L; ++k) std::memcpy(&b, &lanes[k], 4), bits |= b;
+  for (; i < n; ++i) std::memcpy(&b, p + i, 4), bits |= b;  // none: buffers are whole cache lines
+  float s;
+  std::memcpy(&s, &bits, 4);
   return s;
 }
 
@@ -236,8 +245,11 @@ void register_all() {
   auto reg = [](const std::string& name, auto fn) { benchmark::RegisterBenchmark(name.c_str(), fn)->Unit(benchmark::kMicrosecond); };
   auto bytes_of = [](auto w) { return w->bytes(); };
   std::vector<Entry> entries;
+  // Each network: its step alone, and (paired/) its step interleaved with a plain read of its own
+  // weight buffers (see bench_paired: the robust step/read ratio).
 #define SB_NET(NAME, NET, TABLE, KIND)                                                           \
   reg("sparsebody/" NAME, [](benchmark::State& s) { bench_network<NET>(s, TABLE, KIND); });      \
+  reg("paired/" NAME, [](benchmark::State& s) { bench_paired<NET>(s, TABLE, KIND); });           \
   entries.push_back({NAME, bytes_of(make_weights<NET>(TABLE, KIND))});
   SB_NET("GRU_37x1024", GruOnly<1024>, lobstr_table(1024, 0, true), "gru")
   SB_NET("GRU_37x256", GruOnly<256>, lobstr_table(256, 0, true), "gru")
@@ -264,19 +276,6 @@ void register_all() {
   SB_NET("N3P_policy_868_256_256_72_q8weights", N3PPolicyQ8, mlp_table({868, 256, 256, 72}), "n3p_policy")
   SB_NET("QuestSim_475_400_300_200_33_q8weights", QuestSimQ8, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
 #undef SB_NET
-  // Step and plain read of its own weights, interleaved (see bench_paired): the robust ratio.
-#define SB_PAIRED(NAME, NET, TABLE, KIND) \
-  reg("paired/" NAME, [](benchmark::State& s) { bench_paired<NET>(s, TABLE, KIND); });
-  SB_PAIRED("GRU_37x1024", GruOnly<1024>, lobstr_table(1024, 0, true), "gru")
-  SB_PAIRED("GRU_37x256", GruOnly<256>, lobstr_table(256, 0, true), "gru")
-  SB_PAIRED("LoBSTr_H1024", LoBSTr<1024>, lobstr_table(1024, kLatent), "lobstr")
-  SB_PAIRED("LoBSTr_H256", LoBSTr<256>, lobstr_table(256, kLatent), "lobstr")
-  SB_PAIRED("N3P_Gsig_H64", Gsig, n3p_table(45, 64, 12), "n3p_signal")
-  SB_PAIRED("N3P_Glo_H128", Glo, n3p_table(12, 128, 113), "n3p_lower")
-  SB_PAIRED("N3P_Gup_H128", Gup, n3p_table(45, 128, 201), "n3p_upper")
-  SB_PAIRED("N3P_policy_868_256_256_72", N3PPolicy, mlp_table({868, 256, 256, 72}), "n3p_policy")
-  SB_PAIRED("QuestSim_475_400_300_200_33", QuestSim, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
-#undef SB_PAIRED
   add_ratio("GRU_37x1024 f16 weights / plain read of its float weights", "sparsebody/GRU_37x1024_f16weights",
             "read/" + std::to_string(entries[0].weight_bytes) + "B/" + std::to_string(entries[0].weight_bytes));
   add_ratio("LoBSTr_H1024 f16 weights / plain read of its float weights", "sparsebody/LoBSTr_H1024_f16weights",
