@@ -14,7 +14,7 @@
 // --no-shift compares with the current frame instead.
 //   n3p_physics_eval FILE.json [--clips N] [--every K] [--no-shift] [--weights PREFIX]
 //     [--root-kp X] [--root-kd X] [--root-kr X] [--root-dr X] [--max-force N] [--max-torque NM]
-//     [--feedforward SCALE] [--correction-kp X] [--target-lead FRAMES] [--hold-targets 0|1]
+//     [--feedforward SCALE] [--correction-kp X] [--target-lead FRAMES] [--hold-targets 0|1] [--contact-passes N]
 //     [--stance-support 0|1] [--support-moment 0|1] [--support-at-state 0|1] [--support-on-contact 0|1]
 //     [--velocity-targets 0|1] [--acceleration SCALE] [--ground-reference 0|1] [--ground-resets 0|1]
 //     [--distributed 0|1]
@@ -103,6 +103,7 @@ int main(int argc, char** argv) {
       continue;
     }
     if (num("--target-lead", lead)) { cfg.target_lead = static_cast<int>(lead); continue; }
+    if (num("--contact-passes", lead)) { cfg.contact_passes = static_cast<int>(lead); continue; }
     if (num("--hold-targets", hold)) { cfg.per_frame_targets = hold == 0; continue; }
     if (!std::strcmp(argv[i], "--clips") && i + 1 < argc) max_clips = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--every") && i + 1 < argc) every = std::max(1, std::atoi(argv[++i]));

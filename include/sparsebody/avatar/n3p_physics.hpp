@@ -65,12 +65,19 @@ struct N3PPhysicsConfig {
   control::TrackerCorrectionConfig correction{};  // kp 1000, kd 10 (§6.2)
   control::FallDetectorConfig fall{};
   int substeps = 4;                  // simulation steps per 30 Hz frame (120 Hz)
+  // Contact solves per simulation step (Simulator::contact.max_passes; the engine's default is 6).
+  // On walking input the light-contact iterations of the feet do not settle (the sliding damper
+  // and Fn feed each other back), so a step runs to the cap and its result depends on where it
+  // stops. Validation (301 clips, 3-point, delay removed), cap 3 / 4 / 5 / 6 / 8: falls 6 / 81 / 14
+  // / 30 / 25 in 1330 s, MPJPE 8.47 / 9.09 / 8.37 / 8.82 / 8.77 cm; bounded at 300 N: 95 vs 107
+  // falls at 3 vs 6. 3 also makes the benchmark frame 70 instead of 92 us. `--contact-passes`.
+  int contact_passes = 3;
   // Model-based controller only:
   // - per_frame_targets: PD targets refreshed every frame to the reference `target_lead` frames
   //   ahead of the frame being tracked, instead of held for 3 frames (the policy's 10 Hz, §7).
-  //   Chosen by measurement (validation, 3-point, delay removed): per frame with lead 2: MPJPE
-  //   9.53 cm, 118 falls, skating 26.3 cm/s; lead 1: 9.63 cm, 137, 27.3; held (the newest
-  //   reference, 1-3 frames ahead): 9.59 cm, 130, 26.6. `--hold-targets 1` in the evaluation.
+  //   Chosen by measurement (validation, 3-point, delay removed, the default otherwise): per frame
+  //   with lead 2: MPJPE 8.47 cm, 6 falls in 1330 s; lead 1: 8.52 cm, 11; held (the newest
+  //   reference, 1-3 frames ahead): 8.64 cm, 9. `--hold-targets 1` / `--target-lead` in the evaluation.
   // - velocity_targets: the servos' velocity targets qd* = the reference velocity (every frame),
   //   so kd damps the lag behind the motion instead of the motion itself.
   // - ground_resets: a (re)start or fall reset puts the character on the reference lifted out of
@@ -129,6 +136,7 @@ class N3PPhysicsPipeline {
         fall_(cfg.fall),
         resampler_(direct_.meta().frame_rate) {
     if (policy) control_ = std::make_unique<ControlPredictor>(w, std::move(policy));
+    sim_.contact.max_passes = cfg.contact_passes;
     for (auto& q : ref_) q = model_.neutralConfiguration();
     q_tmp_ = model_.neutralConfiguration();
     q_place_ = q_tmp_;

@@ -68,9 +68,9 @@ struct ModelBasedControllerConfig {
   double root_dr = 100;      // N m s/rad residual torque, angular velocity gain
   bool ground_reference = true;    // root target lifted out of the floor (ground_lift())
   double max_ground_lift = 0.1;    // m
-  // Bounds, chosen on the validation clips (301, 3-point; falls in 1330 s / MPJPE / mean |F|):
-  // 300 N, 150 N m: 118 / 9.53 cm / 199 N;  500 N, 250 N m: 65 / 9.02 cm / 243 N;
-  // 620 N, 250 N m: 30 / 8.82 cm / 260 N;   700 N, 250 N m: 17 / 8.79 cm / 267 N.
+  // Bounds, chosen on the validation clips (301, 3-point, N3PPhysicsPipeline defaults; falls in
+  // 1330 s / MPJPE / mean |F|): 300 N, 150 N m: 104 / 9.54 cm / 197 N;  500 N, 250 N m: 20 / 8.70
+  // cm / 243 N;  620 N, 250 N m: 6 / 8.47 cm / 254 N;  700 N, 250 N m: 4 / 8.27 cm / 255 N.
   // The default force bound is the avatar's weight (63 kg x 9.81 = 618 N): the help can at most
   // hold the body up, never throw it; on average the feet still carry about 60 % of the weight.
   double max_force = 620;    // N   |F| bound
