@@ -33,11 +33,12 @@
 // lifted out of the floor (ground_reference, ground_lift(): the predicted pose put on the avatar's
 // feet is 4.5 cm in the floor on average, and a root servo toward it pulls the body down on the
 // feet it stands on).
-// Validation clips (301, 3-point, `n3p_physics_eval`; each part of the defaults turned off in turn
-// in the README, Neural3Points physics mode): falls 0.43 -> 0.09 per second, MPJPE 12.29 -> 9.53 cm
-// (delay removed) against the former default (Distributed, no stance support, no velocity targets,
-// no acceleration feed-forward, reference in the floor). The stance support with its moment is
-// most of it (without: 0.28 / s); ResidualMode::Distributed with the same rest: 0.11 / s, 10.31 cm.
+// Validation clips (301, 3-point, `n3p_physics_eval`, N3PPhysicsPipeline defaults; each part
+// turned off in turn in the README, Neural3Points physics mode): falls 0.43 -> 0.005 per second,
+// MPJPE 12.29 -> 8.47 cm (delay removed) against the former default (Distributed, 300 N bound, no
+// stance support, no velocity targets, no acceleration feed-forward, reference in the floor, 6
+// contact solves per step). Without the stance support: 10.01 cm, 14 falls instead of 6;
+// ResidualMode::Distributed with the same rest: 10.67 cm, 15 falls.
 // Per step: no allocation, no exception.
 #pragma once
 #include <algorithm>
