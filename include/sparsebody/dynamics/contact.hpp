@@ -30,7 +30,7 @@ struct ContactParams {
   S friction = S(1.0);             // mu (Coulomb), floor and boxes
   S margin = S(0.01);              // [m] predictive distance for candidates
   S slip_eps = S(1e-3);            // [m/s] slip speed floor in the sliding damper mu Fn / |v_t|
-  int max_passes = 6;              // ABA solves per step (1 + active-set / friction updates)
+  int max_passes = 6;              // ABA solves per step (1 + active-set / friction updates); < 1 acts as 1
 };
 
 template <class S>

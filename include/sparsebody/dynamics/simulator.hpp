@@ -180,7 +180,8 @@ class Simulator {
       passes_ = 1;
       bound_root_servo();
     } else {
-      for (int pass = 0; pass < contact.max_passes; ++pass) {
+      const int max_passes = std::max(1, contact.max_passes);  // at least the one solve a step needs
+      for (int pass = 0; pass < max_passes; ++pass) {
         assembleContacts(m_, d_, contacts(), nc_, contact, h);
         ok = abaSolve(m_, d_, tau_, qdd_, hd, with_kd, root_k);
         ++passes_;
