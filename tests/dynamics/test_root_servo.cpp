@@ -13,6 +13,23 @@ using namespace sparsebody;
 using namespace sparsebody::dynamics;
 
 namespace {
+// The residual servo's gains of Neural3Points' default controller (model_based_controller.hpp).
+void stiffRootServo(RootServo<double>& rs) {
+  rs.enabled = true;
+  rs.kp_linear = 5000;
+  rs.kd_linear = 1000;
+  rs.kp_angular = 2000;
+  rs.kd_angular = 200;
+}
+// A random PD target (rotation vector ~ N(0, sigma) per axis) for every spherical joint.
+template <class Sim, class Model>
+void randomSphericalTargets(Sim& sim, const Model& m, std::mt19937& rng, double sigma) {
+  std::normal_distribution<double> n;
+  for (int i = 0; i < m.nb; ++i)
+    if (m.bodies[i].joint == JointType::Spherical)
+      sim.setTarget(i, quatExp(Vec3<double>(sigma * n(rng), sigma * n(rng), sigma * n(rng))));
+}
+
 // Avatar in the air (no contacts) held by the root servo at its start pose, random joint targets
 // every 0.5 s for 10 s. Returns the simulated time; worst root position error in `err`.
 double hoverRun(bool implicit_damping, StepStatus& status, double& err) {
@@ -21,22 +38,14 @@ double hoverRun(bool implicit_damping, StepStatus& status, double& err) {
   sim.contacts_enabled = false;
   sim.implicit_damping = implicit_damping;
   sim.velocity_limit = 1e4;
-  auto& rs = sim.root_servo;
-  rs.enabled = true;
-  rs.kp_linear = 5000;
-  rs.kd_linear = 1000;
-  rs.kp_angular = 2000;
-  rs.kd_angular = 200;
+  stiffRootServo(sim.root_servo);
   const auto q0 = sim.q();
   std::mt19937 rng(3);
-  std::normal_distribution<double> n;
   const double h = 1.0 / 120;
   err = 0;
   status = StepStatus::Ok;
   for (int k = 0; k < 10 * 120; ++k) {
-    if (k % 60 == 0)
-      for (int i = 0; i < m.nb; ++i)
-        if (m.bodies[i].joint == JointType::Spherical) sim.setTarget(i, quatExp(Vec3<double>(0.4 * n(rng), 0.4 * n(rng), 0.4 * n(rng))));
+    if (k % 60 == 0) randomSphericalTargets(sim, m, rng, 0.4);
     status = sim.step(h);
     if (status != StepStatus::Ok) return k * h;
     err = std::max(err, (sim.data().p[0] - Vec3<double>(q0.head<3>())).norm());
@@ -63,11 +72,7 @@ TEST_CASE("root servo: the applied wrench never exceeds its bounds, and reaches 
   const auto m = character::defaultAvatar<double>();
   Simulator<double, 24, 72> sim(m);
   auto& rs = sim.root_servo;
-  rs.enabled = true;
-  rs.kp_linear = 5000;
-  rs.kd_linear = 1000;
-  rs.kp_angular = 2000;
-  rs.kd_angular = 200;
+  stiffRootServo(rs);
   rs.max_force = 400;
   rs.max_torque = 60;
   std::mt19937 rng(4);
@@ -76,8 +81,7 @@ TEST_CASE("root servo: the applied wrench never exceeds its bounds, and reaches 
   int at_f = 0, at_n = 0;
   for (int k = 0; k < 6 * 120; ++k) {
     if (k % 30 == 0) {  // joint targets and a root target that jump: large accelerations
-      for (int i = 0; i < m.nb; ++i)
-        if (m.bodies[i].joint == JointType::Spherical) sim.setTarget(i, quatExp(Vec3<double>(0.5 * n(rng), 0.5 * n(rng), 0.5 * n(rng))));
+      randomSphericalTargets(sim, m, rng, 0.5);
       sim.targets()(0) = 0.03 * n(rng);
       sim.targets()(2) = 0.03 * n(rng);
     }
