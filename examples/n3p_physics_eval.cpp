@@ -26,6 +26,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <string>
@@ -78,9 +79,18 @@ int main(int argc, char** argv) {
   bool shift = true;
   avatar::N3PPhysicsConfig cfg;
   for (int i = 2; i < argc; ++i) {
+    // A numeric flag: its value must be a whole number (no trailing text); anything else is a
+    // usage error, not a silent 0.
     auto num = [&](const char* flag, double& x) {
-      if (std::strcmp(argv[i], flag) || i + 1 >= argc) return false;
-      x = std::atof(argv[++i]);
+      if (std::strcmp(argv[i], flag)) return false;
+      char* end = nullptr;
+      const double v = i + 1 < argc ? std::strtod(argv[i + 1], &end) : 0.0;
+      if (i + 1 >= argc || end == argv[i + 1] || *end != '\0' || !std::isfinite(v)) {
+        std::fprintf(stderr, "n3p_physics_eval: %s expects a number, got '%s'\n", flag, i + 1 < argc ? argv[i + 1] : "");
+        std::exit(2);
+      }
+      x = v;
+      ++i;
       return true;
     };
     auto& cc = cfg.controller;
@@ -103,21 +113,43 @@ int main(int argc, char** argv) {
       continue;
     }
     if (num("--target-lead", lead)) { cfg.target_lead = static_cast<int>(lead); continue; }
-    if (num("--contact-passes", lead)) { cfg.contact_passes = static_cast<int>(lead); continue; }
+    double passes = cfg.contact_passes, count = 0;
+    if (num("--contact-passes", passes)) { cfg.contact_passes = static_cast<int>(passes); continue; }
     if (num("--hold-targets", hold)) { cfg.per_frame_targets = hold == 0; continue; }
-    if (!std::strcmp(argv[i], "--clips") && i + 1 < argc) max_clips = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--every") && i + 1 < argc) every = std::max(1, std::atoi(argv[++i]));
-    else if (!std::strcmp(argv[i], "--no-shift")) shift = false;
+    if (num("--clips", count)) { max_clips = static_cast<int>(count); continue; }
+    if (num("--every", count)) { every = std::max(1, static_cast<int>(count)); continue; }
+    if (!std::strcmp(argv[i], "--no-shift")) shift = false;
     else if (!std::strcmp(argv[i], "--weights") && i + 1 < argc) prefix = argv[++i];
+    else {
+      std::fprintf(stderr, "n3p_physics_eval: unknown option '%s' (the flags are listed at the top of examples/n3p_physics_eval.cpp)\n", argv[i]);
+      return 2;
+    }
   }
   std::ifstream in(argv[1]);
   if (!in) {
     std::fprintf(stderr, "cannot open %s\n", argv[1]);
     return 2;
   }
-  const auto d = nlohmann::json::parse(in);
-  const auto w = Physics::load(prefix);
-  const std::vector<int> upper = d["upper"], lower = d["lower"], toes = d["toes"];
+  nlohmann::json d;
+  std::vector<int> upper, lower, toes;
+  try {
+    d = nlohmann::json::parse(in);
+    upper = d.at("upper").get<std::vector<int>>();
+    lower = d.at("lower").get<std::vector<int>>();
+    toes = d.at("toes").get<std::vector<int>>();
+    if (toes.size() != 2 || !d.at("clips").is_array()) throw std::runtime_error("expected 2 'toes' and a 'clips' array");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "n3p_physics_eval: %s: not a --dump-direct file (%s)\n", argv[1], e.what());
+    return 2;
+  }
+  const auto w = [&] {
+    try {
+      return Physics::load(prefix);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "n3p_physics_eval: %s\n", e.what());
+      std::exit(2);
+    }
+  }();
   Physics phys(w, cfg);
   const pose::Skeleton& s = phys.skeleton();
   // Standing heights of the foot and toe joints (skeleton rest offsets under the standing root).
