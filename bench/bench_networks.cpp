@@ -112,27 +112,6 @@ void bench_network(benchmark::State& st, io::TensorTable table, const char* kind
                                            benchmark::Counter::OneK::kIs1000);
 }
 
-// The floor: stream `bytes` of float weights with aligned SIMD loads into independent accumulators.
-void BM_WeightRead(benchmark::State& st) {
-  const std::size_t n = static_cast<std::size_t>(st.range(0)) / sizeof(float);
-  AlignedBuffer<float> buf(n);
-  for (std::size_t i = 0; i < n; ++i) buf[i] = float(i % 7) * 0.25f;
-  using B = nn::Batch<float>;
-  constexpr std::size_t L = nn::kLanes<float>;
-  for (auto _ : st) {
-    B acc[8] = {B(0.f), B(0.f), B(0.f), B(0.f), B(0.f), B(0.f), B(0.f), B(0.f)};
-    std::size_t i = 0;
-    for (; i + 8 * L <= n; i += 8 * L)
-      for (int k = 0; k < 8; ++k) acc[k] += B::load_aligned(buf.data() + i + k * L);
-    float s = 0;
-    for (; i < n; ++i) s += buf[i];
-    for (int k = 0; k < 8; ++k) s += xsimd::hadd(acc[k]);
-    benchmark::DoNotOptimize(s);
-  }
-  st.counters["GB/s"] = benchmark::Counter(double(n * sizeof(float)), benchmark::Counter::kIsIterationInvariantRate,
-                                           benchmark::Counter::OneK::kIs1000);
-}
-
 // Plain read of n floats' worth of bytes at p with aligned SIMD loads into 8 independent
 // accumulators (p is cache-line aligned, as every weight buffer is). Bitwise OR, not addition: the
 // buffers of f16 / int8 storage read as floats may hold NaN or denormal patterns.
@@ -153,6 +132,16 @@ inline float plain_read(const float* p, std::size_t n) {
   float s;
   std::memcpy(&s, &bits, 4);
   return s;
+}
+
+// The floor: stream `bytes` of float weights with plain_read (the same reader as paired/).
+void BM_WeightRead(benchmark::State& st) {
+  const std::size_t n = static_cast<std::size_t>(st.range(0)) / sizeof(float);
+  AlignedBuffer<float> buf(n);
+  for (std::size_t i = 0; i < n; ++i) buf[i] = float(i % 7) * 0.25f;
+  for (auto _ : st) benchmark::DoNotOptimize(plain_read(buf.data(), n));
+  st.counters["GB/s"] = benchmark::Counter(double(n * sizeof(float)), benchmark::Counter::kIsIterationInvariantRate,
+                                           benchmark::Counter::OneK::kIs1000);
 }
 
 // The ratio "step / plain read of its weights", measured robustly on a noisy shared machine: every
