@@ -39,11 +39,11 @@ struct Fixture {
   explicit Fixture(const M& model) : m(model), d(model) {
     std::mt19937 rng(1);
     std::normal_distribution<double> n;
-    q = m.neutralConfiguration();
+    q = m.neutral_configuration();
     for (int i = 0; i < m.nb; ++i) {  // a moderately bent pose
       const auto& b = m.bodies[i];
       if (b.joint == JointType::Spherical) {
-        const Quat<double> r = quatExp(Vec3<double>(0.3 * n(rng), 0.3 * n(rng), 0.3 * n(rng)));
+        const Quat<double> r = quat_exp(Vec3<double>(0.3 * n(rng), 0.3 * n(rng), 0.3 * n(rng)));
         q(b.q_index) = r.w(); q(b.q_index + 1) = r.x(); q(b.q_index + 2) = r.y(); q(b.q_index + 3) = r.z();
       } else if (b.joint == JointType::Revolute) {
         q(b.q_index) = 0.3 * n(rng);
@@ -59,22 +59,22 @@ struct Fixture {
 // Model standing on its feet (root lowered so the foot boxes touch the floor).
 template <class M>
 typename M::VecQ standing(const M& m) {
-  typename M::VecQ q = m.neutralConfiguration();
+  typename M::VecQ q = m.neutral_configuration();
   Data<double, M::kMaxBodies, M::kMaxDofs> d(m);
-  forwardKinematics(m, d, q, nullptr);
+  forward_kinematics(m, d, q, nullptr);
   double lo = 1e9;
   for (int k = 0; k < m.num_points; ++k)
-    lo = std::min(lo, pointPosition(d, m.points[k].body, m.points[k].pos).y() - m.points[k].radius);
+    lo = std::min(lo, point_position(d, m.points[k].body, m.points[k].pos).y() - m.points[k].radius);
   q(1) -= lo + 0.0005;  // 0.5 mm into the floor
   return q;
 }
 
-const H34& h34() { static H34 m = character::humanoid3dLike<double>(); return m; }
-const Av& avatar() { static Av m = character::defaultAvatar<double>(); return m; }
+const H34& h34() { static H34 m = character::humanoid3d_like<double>(); return m; }
+const Av& avatar() { static Av m = character::default_avatar<double>(); return m; }
 
 // Per-call time of f in microseconds: median of 5 batches.
 template <class F>
-double timeUs(F&& f, int iters) {
+double time_us(F&& f, int iters) {
   std::array<double, 5> t{};
   for (double& x : t) {
     const auto a = std::chrono::steady_clock::now();
@@ -86,7 +86,7 @@ double timeUs(F&& f, int iters) {
 }
 
 template <class M>
-void runAba(benchmark::State& st, const M& model) {
+void run_aba(benchmark::State& st, const M& model) {
   Fixture<M> f(model);
   for (auto _ : st) {
     aba(f.m, f.d, f.q, f.qd, f.tau, f.qdd, 1.0 / 120);
@@ -94,7 +94,7 @@ void runAba(benchmark::State& st, const M& model) {
   }
 }
 template <class M>
-void runRnea(benchmark::State& st, const M& model) {
+void run_rnea(benchmark::State& st, const M& model) {
   Fixture<M> f(model);
   typename M::VecV out(f.m.nv);
   for (auto _ : st) {
@@ -103,7 +103,7 @@ void runRnea(benchmark::State& st, const M& model) {
   }
 }
 template <class M>
-void runCrba(benchmark::State& st, const M& model) {
+void run_crba(benchmark::State& st, const M& model) {
   Fixture<M> f(model);
   for (auto _ : st) {
     crba(f.m, f.d, f.q);
@@ -120,16 +120,16 @@ struct StepRunner {
   typename M::VecV v0;
   int k = 0;
   long contacts = 0, steps = 0;
-  explicit StepRunner(const M& m) : sim(m), q0(standing(m)), v0(M::VecV::Zero(m.nv)) { sim.setState(q0, v0); }
+  explicit StepRunner(const M& m) : sim(m), q0(standing(m)), v0(M::VecV::Zero(m.nv)) { sim.set_state(q0, v0); }
   void operator()() {
-    if (++k == 60) { k = 0; sim.setState(q0, v0); }
+    if (++k == 60) { k = 0; sim.set_state(q0, v0); }
     benchmark::DoNotOptimize(sim.step(1.0 / 120));
-    contacts += sim.numActiveContacts();
+    contacts += sim.num_active_contacts();
     ++steps;
   }
 };
 template <class M>
-void runStep(benchmark::State& st, const M& model) {
+void run_step(benchmark::State& st, const M& model) {
   StepRunner<M> r(model);
   for (auto _ : st) r();
   st.counters["contacts"] = double(r.contacts) / double(std::max(1L, r.steps));
@@ -139,7 +139,7 @@ void runStep(benchmark::State& st, const M& model) {
 // 10th percentile and the median per call (wall, us). On a shared, loaded machine the low
 // percentile is the better estimate of the unloaded cost than the mean of one long run.
 template <class M>
-void runAbaLoop(benchmark::State& st, const M& model) {
+void run_aba_loop(benchmark::State& st, const M& model) {
   Fixture<M> f(model);
   std::array<double, 200> t{};
   for (auto _ : st) {
@@ -156,19 +156,19 @@ void runAbaLoop(benchmark::State& st, const M& model) {
   st.counters["p10_us"] = t[20];
   st.counters["median_us"] = t[100];
 }
-void BM_ABALoop_Humanoid34(benchmark::State& st) { runAbaLoop(st, h34()); }
-void BM_ABALoop_Avatar(benchmark::State& st) { runAbaLoop(st, avatar()); }
+void BM_ABALoop_Humanoid34(benchmark::State& st) { run_aba_loop(st, h34()); }
+void BM_ABALoop_Avatar(benchmark::State& st) { run_aba_loop(st, avatar()); }
 BENCHMARK(BM_ABALoop_Humanoid34)->Iterations(1);
 BENCHMARK(BM_ABALoop_Avatar)->Iterations(1);
 
-void BM_ABA_Humanoid34(benchmark::State& st) { runAba(st, h34()); }
-void BM_RNEA_Humanoid34(benchmark::State& st) { runRnea(st, h34()); }
-void BM_CRBA_Humanoid34(benchmark::State& st) { runCrba(st, h34()); }
-void BM_Step_Humanoid34(benchmark::State& st) { runStep(st, h34()); }
-void BM_ABA_Avatar(benchmark::State& st) { runAba(st, avatar()); }
-void BM_RNEA_Avatar(benchmark::State& st) { runRnea(st, avatar()); }
-void BM_CRBA_Avatar(benchmark::State& st) { runCrba(st, avatar()); }
-void BM_Step_Avatar(benchmark::State& st) { runStep(st, avatar()); }
+void BM_ABA_Humanoid34(benchmark::State& st) { run_aba(st, h34()); }
+void BM_RNEA_Humanoid34(benchmark::State& st) { run_rnea(st, h34()); }
+void BM_CRBA_Humanoid34(benchmark::State& st) { run_crba(st, h34()); }
+void BM_Step_Humanoid34(benchmark::State& st) { run_step(st, h34()); }
+void BM_ABA_Avatar(benchmark::State& st) { run_aba(st, avatar()); }
+void BM_RNEA_Avatar(benchmark::State& st) { run_rnea(st, avatar()); }
+void BM_CRBA_Avatar(benchmark::State& st) { run_crba(st, avatar()); }
+void BM_Step_Avatar(benchmark::State& st) { run_step(st, avatar()); }
 BENCHMARK(BM_ABA_Humanoid34);
 BENCHMARK(BM_RNEA_Humanoid34);
 BENCHMARK(BM_CRBA_Humanoid34);
@@ -184,10 +184,10 @@ void BM_StepFloat_Humanoid34(benchmark::State& st) {
   const auto q0 = standing(h34());
   Model<float, 16, 40>::VecQ qf = q0.cast<float>();
   Model<float, 16, 40>::VecV vf = Model<float, 16, 40>::VecV::Zero(mf.nv);
-  sim.setState(qf, vf);
+  sim.set_state(qf, vf);
   int k = 0;
   for (auto _ : st) {
-    if (++k == 60) { k = 0; sim.setState(qf, vf); }
+    if (++k == 60) { k = 0; sim.set_state(qf, vf); }
     benchmark::DoNotOptimize(sim.step(1.0f / 120));
   }
 }
@@ -205,7 +205,7 @@ struct Mj {
     o.contact = contact;
     o.servo_damping = true;  // kd as MuJoCo joint damping: implicit in its Euler integrator
     const std::string path = std::string(SPARSEBODY_BENCH_DIR) + "/bench_" + tag + ".xml";
-    std::ofstream(path) << toMjcf(model, o);
+    std::ofstream(path) << to_mjcf(model, o);
     char err[1000] = "";
     m = mj_loadXML(path.c_str(), nullptr, err, sizeof err);
     if (!m) { std::fprintf(stderr, "MuJoCo: %s\n", err); std::abort(); }
@@ -217,7 +217,7 @@ struct Mj {
       const auto& b = model.bodies[i];
       const int j = mj_name2id(m, mjOBJ_JOINT, model.names[i].c_str());
       if (j < 0) continue;
-      for (int k = 0; k < jointNq(b.joint); ++k) qpos0[m->jnt_qposadr[j] + k] = q(b.q_index + k);
+      for (int k = 0; k < joint_nq(b.joint); ++k) qpos0[m->jnt_qposadr[j] + k] = q(b.q_index + k);
     }
     reset();
   }
@@ -230,7 +230,7 @@ struct Mj {
 };
 
 template <class M>
-void runMjStep(benchmark::State& st, const M& model, const char* tag) {
+void run_mj_step(benchmark::State& st, const M& model, const char* tag) {
   Mj<M> mj(model, true, tag);
   int k = 0;
   long con = 0, steps = 0;
@@ -243,24 +243,24 @@ void runMjStep(benchmark::State& st, const M& model, const char* tag) {
   for (auto _ : st) step();
   st.counters["contacts"] = double(con) / double(std::max(1L, steps));
   StepRunner<M> ours(model);
-  const double t_ours = timeUs(ours, 2000), t_mj = timeUs(step, 2000);
+  const double t_ours = time_us(ours, 2000), t_mj = time_us(step, 2000);
   st.counters["ours_us"] = t_ours;
   st.counters["ratio"] = t_mj / t_ours;
 }
 template <class M>
-void runMjForward(benchmark::State& st, const M& model, const char* tag) {
+void run_mj_forward(benchmark::State& st, const M& model, const char* tag) {
   Mj<M> mj(model, false, tag);
   for (int k = 0; k < mj.m->nv; ++k) mj.d->qvel[k] = 0.1 * (k % 7);
   auto fwd = [&] { mj_forward(mj.m, mj.d); };
   for (auto _ : st) fwd();
   Fixture<M> f(model);
-  const double t_ours = timeUs([&] { aba(f.m, f.d, f.q, f.qd, f.tau, f.qdd, 1.0 / 120); benchmark::DoNotOptimize(f.qdd.data()); }, 20000);
-  const double t_mj = timeUs(fwd, 20000);
+  const double t_ours = time_us([&] { aba(f.m, f.d, f.q, f.qd, f.tau, f.qdd, 1.0 / 120); benchmark::DoNotOptimize(f.qdd.data()); }, 20000);
+  const double t_mj = time_us(fwd, 20000);
   st.counters["aba_us"] = t_ours;
   st.counters["ratio"] = t_mj / t_ours;
 }
 template <class M>
-void runMjRne(benchmark::State& st, const M& model, const char* tag) {
+void run_mj_rne(benchmark::State& st, const M& model, const char* tag) {
   Mj<M> mj(model, false, tag);
   mj_forward(mj.m, mj.d);
   std::vector<double> res(mj.m->nv);
@@ -268,17 +268,17 @@ void runMjRne(benchmark::State& st, const M& model, const char* tag) {
   for (auto _ : st) rne();
   Fixture<M> f(model);
   typename M::VecV out(f.m.nv);
-  const double t_ours = timeUs([&] { rnea(f.m, f.d, f.q, f.qd, f.tau, out); benchmark::DoNotOptimize(out.data()); }, 20000);
-  const double t_mj = timeUs(rne, 20000);
+  const double t_ours = time_us([&] { rnea(f.m, f.d, f.q, f.qd, f.tau, out); benchmark::DoNotOptimize(out.data()); }, 20000);
+  const double t_mj = time_us(rne, 20000);
   st.counters["rnea_us"] = t_ours;
   st.counters["ratio"] = t_mj / t_ours;
 }
-void BM_MjStep_Humanoid34(benchmark::State& st) { runMjStep(st, h34(), "h34_step"); }
-void BM_MjForward_Humanoid34(benchmark::State& st) { runMjForward(st, h34(), "h34_fwd"); }
-void BM_MjRne_Humanoid34(benchmark::State& st) { runMjRne(st, h34(), "h34_rne"); }
-void BM_MjStep_Avatar(benchmark::State& st) { runMjStep(st, avatar(), "avatar_step"); }
-void BM_MjForward_Avatar(benchmark::State& st) { runMjForward(st, avatar(), "avatar_fwd"); }
-void BM_MjRne_Avatar(benchmark::State& st) { runMjRne(st, avatar(), "avatar_rne"); }
+void BM_MjStep_Humanoid34(benchmark::State& st) { run_mj_step(st, h34(), "h34_step"); }
+void BM_MjForward_Humanoid34(benchmark::State& st) { run_mj_forward(st, h34(), "h34_fwd"); }
+void BM_MjRne_Humanoid34(benchmark::State& st) { run_mj_rne(st, h34(), "h34_rne"); }
+void BM_MjStep_Avatar(benchmark::State& st) { run_mj_step(st, avatar(), "avatar_step"); }
+void BM_MjForward_Avatar(benchmark::State& st) { run_mj_forward(st, avatar(), "avatar_fwd"); }
+void BM_MjRne_Avatar(benchmark::State& st) { run_mj_rne(st, avatar(), "avatar_rne"); }
 BENCHMARK(BM_MjStep_Humanoid34);
 BENCHMARK(BM_MjForward_Humanoid34);
 BENCHMARK(BM_MjRne_Humanoid34);

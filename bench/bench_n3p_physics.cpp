@@ -55,7 +55,7 @@ void physics_frame(benchmark::State& state) {
   for (auto _ : state) {
     p.push(frame(t++));
     benchmark::DoNotOptimize(p.world().position[0]);
-    passes += p.simulator().lastPasses();  // ABA solves of the frame's last 120 Hz step
+    passes += p.simulator().last_passes();  // ABA solves of the frame's last 120 Hz step
     frames += 1;
   }
   state.counters["aba_passes"] = frames > 0 ? passes / frames : 0;
@@ -86,7 +86,7 @@ struct SimFixture {
   dynamics::Simulator<float, 24, 72> sim{m};
   control::ModelBasedController<float, 24, 72> ctl{m};
   control::TrackerCorrection<float, 24, 72> tc{m};
-  Physics::VecQ q0 = m.neutralConfiguration();
+  Physics::VecQ q0 = m.neutral_configuration();
   Physics::VecV tau = Physics::VecV::Zero(m.nv);
   double contact[2] = {1, 1};
 };
@@ -100,7 +100,7 @@ void BM_N3PPhysicsSimStep(benchmark::State& state) {
   Physics::VecV v0 = Physics::VecV::Zero(f.m.nv);
   long k = 0;
   for (auto _ : state) {
-    if (++k % 60 == 0) f.sim.setState(f.q0, v0);  // stay standing on the floor
+    if (++k % 60 == 0) f.sim.set_state(f.q0, v0);  // stay standing on the floor
     f.ctl.apply(f.m, f.sim, 0.5f, f.tau);
     f.tc.apply(f.m, f.sim.data(), target, present, f.tau);
     f.sim.torques() = f.tau;

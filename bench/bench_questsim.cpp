@@ -1,11 +1,11 @@
 // QuestSim control step and its parts, on the default avatar scaled to 1.62 m:
 //   BM_QuestSimControlStep<float/double simulation, float/f16/q8 policy weights>: observation + policy + torques
-//     + 2 substeps + fall check (QuestSimController::controlStep), the issue's <= 40 us target;
+//     + 2 substeps + fall check (QuestSimPipeline::control_step), the issue's <= 40 us target;
 //   BM_QuestSimTick: the same from a TrackerFrame (sanitiser + window shift added);
 //   BM_QuestSimObservation, BM_QuestSimPolicy<W>, BM_QuestSimSubstep: the parts.
 // The policy has random weights made here (PyTorch-default uniform init, output layer x 0.01 like a
 // PPO policy head, foot forces normalised by 618 N): an untrained policy, so the character falls
-// about every 10 steps and is stood up again inside controlStep (counted as `falls`), as it would be
+// about every 10 steps and is stood up again inside control_step (counted as `falls`), as it would be
 // at run time. Feet are on the ground in every step (contacts: `contacts` counter).
 #include <benchmark/benchmark.h>
 
@@ -15,17 +15,18 @@
 
 #include <nlohmann/json.hpp>
 
-#include "sparsebody/control/questsim_controller.hpp"
+#include "sparsebody/avatar/questsim.hpp"
 
 using namespace sparsebody;
 using namespace sparsebody::control;
+using namespace sparsebody::avatar;
 
 namespace {
 
 constexpr double kHeight = 1.62;
 
 // The weights document of a random QuestSim policy (list-encoded tensors).
-std::string randomPolicyJson(int in, int out, unsigned seed = 7) {
+std::string random_policy_json(int in, int out, unsigned seed = 7) {
   std::mt19937 rng(seed);
   nlohmann::json doc;
   doc["format"] = "sparsebody-weights";
@@ -42,7 +43,7 @@ std::string randomPolicyJson(int in, int out, unsigned seed = 7) {
     doc["tensors"]["layers." + std::to_string(l) + ".weight"] = {{"shape", {sizes[l + 1], sizes[l]}}, {"data", w}};
     doc["tensors"]["layers." + std::to_string(l) + ".bias"] = {{"shape", {sizes[l + 1]}}, {"data", b}};
   }
-  using L = QuestSimLayout<kDefaultAvatarBodies, kDefaultAvatarJointDofs, 6>;
+  using L = QuestSimLayout<character::kDefaultAvatarBodies, character::kDefaultAvatarJointDofs, 6>;
   std::vector<double> mean(in, 0.0), stdv(in, 1.0);
   for (int k = 0; k < 6; ++k) stdv[L::f + k] = 618.0;
   doc["normalization"]["input_mean"] = {{"shape", {in}}, {"data", mean}};
@@ -52,13 +53,13 @@ std::string randomPolicyJson(int in, int out, unsigned seed = 7) {
 
 template <class C>
 std::shared_ptr<const typename C::Weights> weights() {
-  static auto w = C::Weights::from_string(randomPolicyJson(C::kObservationSize, C::kActionSize),
+  static auto w = C::Weights::from_string(random_policy_json(C::kObservationSize, C::kActionSize),
                                           networks::kQuestSimPolicyKind, "random questsim policy");
   return w;
 }
 
 // A user standing at the origin facing -Z, arms slightly moving.
-trackers::TrackerFrame userFrame(double t) {
+trackers::TrackerFrame user_frame(double t) {
   trackers::TrackerFrame f;
   f.time = t;
   const Eigen::Vector3d head(0.02 * std::sin(t), 0.936 * kHeight, 0.0);
@@ -72,36 +73,36 @@ trackers::TrackerFrame userFrame(double t) {
 }
 
 template <class C>
-void warmUp(C& c) {
-  for (int k = 0; k < 7; ++k) c.tick(userFrame(k / 36.0));
+void warm_up(C& c) {
+  for (int k = 0; k < 7; ++k) c.tick(user_frame(k / 36.0));
 }
 
 template <class C>
 void report(benchmark::State& st, const C& c, long long falls0) {
   st.counters["falls"] = benchmark::Counter(double(c.falls() - falls0), benchmark::Counter::kAvgIterations);
-  st.counters["failures"] = double(c.simulationFailures());
-  st.counters["contacts"] = c.simulator().numContacts();
+  st.counters["failures"] = double(c.simulation_failures());
+  st.counters["contacts"] = c.simulator().num_contacts();
 }
 
 template <class S, class W>
 void BM_QuestSimControlStep(benchmark::State& st) {
-  using C = QuestSimController<S, W>;
+  using C = QuestSimPipeline<S, W>;
   C c(weights<C>(), kHeight);
-  warmUp(c);
+  warm_up(c);
   const long long f0 = c.falls();
-  for (auto _ : st) benchmark::DoNotOptimize(c.controlStep());
+  for (auto _ : st) benchmark::DoNotOptimize(c.control_step());
   report(st, c, f0);
 }
 
 template <class S, class W>
 void BM_QuestSimTick(benchmark::State& st) {
-  using C = QuestSimController<S, W>;
+  using C = QuestSimPipeline<S, W>;
   C c(weights<C>(), kHeight);
-  warmUp(c);
+  warm_up(c);
   const long long f0 = c.falls();
   int k = 7;
   trackers::TrackerFrame frames[64];
-  for (int i = 0; i < 64; ++i) frames[i] = userFrame(i / 36.0);
+  for (int i = 0; i < 64; ++i) frames[i] = user_frame(i / 36.0);
   for (auto _ : st) {
     trackers::TrackerFrame& f = frames[k & 63];
     f.time = k++ / 36.0;
@@ -112,12 +113,12 @@ void BM_QuestSimTick(benchmark::State& st) {
 
 template <class S>
 void BM_QuestSimObservation(benchmark::State& st) {
-  using C = QuestSimController<S>;
+  using C = QuestSimPipeline<S>;
   C c(weights<C>(), kHeight);
-  warmUp(c);
+  warm_up(c);
   alignas(64) std::array<float, C::kObservationSize> o{};
   for (auto _ : st) {
-    c.observationBuilder().build(c.simulator(), c.window(), S(kHeight), o.data());
+    c.observation_builder().build(c.simulator(), c.window(), S(kHeight), o.data());
     benchmark::DoNotOptimize(o.data());
     benchmark::ClobberMemory();
   }
@@ -125,9 +126,9 @@ void BM_QuestSimObservation(benchmark::State& st) {
 
 template <class W>
 void BM_QuestSimPolicy(benchmark::State& st) {
-  using C = QuestSimController<float, W>;
+  using C = QuestSimPipeline<float, W>;
   C c(weights<C>(), kHeight);
-  warmUp(c);
+  warm_up(c);
   nn::Network<typename C::Net> net(weights<C>());
   const auto x = c.observation();
   for (auto _ : st) benchmark::DoNotOptimize(net.step(x.data()));
@@ -141,9 +142,9 @@ void BM_QuestSimPolicy(benchmark::State& st) {
 template <class S>
 void BM_QuestSimSubstep(benchmark::State& st) {
   const int period = int(st.range(0));
-  using C = QuestSimController<S>;
+  using C = QuestSimPipeline<S>;
   C c(weights<C>(), kHeight);
-  warmUp(c);
+  warm_up(c);
   auto& sim = c.simulator();
   const auto q0 = sim.q();
   const auto v0 = sim.v();
@@ -153,10 +154,10 @@ void BM_QuestSimSubstep(benchmark::State& st) {
   for (auto _ : st) {
     sim.torques() = tau;
     benchmark::DoNotOptimize(sim.step(S(1.0 / 72)));
-    passes += sim.lastPasses();
-    contacts += sim.numContacts();
+    passes += sim.last_passes();
+    contacts += sim.num_contacts();
     ++n;
-    if (++k == period) { k = 0; sim.setState(q0, v0); }
+    if (++k == period) { k = 0; sim.set_state(q0, v0); }
   }
   st.counters["contacts"] = double(contacts) / double(n);
   st.counters["aba_passes"] = double(passes) / double(n);

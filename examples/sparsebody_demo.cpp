@@ -21,7 +21,7 @@
 // BVH input: the skeleton is mapped by joint names (pose/joint_map.hpp) and scaled by leg length to
 // the standard skeleton; headset, controllers and pelvis tracker are synthesised from the head,
 // hands and hips, fed at the clip's own rate (the pipeline resamples), and the clip is the ground
-// truth for the metrics. CSV input (io/tracker_csv.hpp): frame N (default 0) is the T-pose used
+// truth for the metrics. CSV input (recordings/tracker_csv.hpp): frame N (default 0) is the T-pose used
 // for calibration. The output BVH is the standard skeleton at the user's size, in centimetres.
 #include <chrono>
 #include <cmath>
@@ -36,9 +36,9 @@
 #include "sparsebody/avatar/lobstr_pipeline.hpp"
 #include "sparsebody/avatar/n3p_direct.hpp"
 #include "sparsebody/avatar/n3p_physics.hpp"
-#include "sparsebody/io/bvh.hpp"
-#include "sparsebody/io/tracker_csv.hpp"
-#include "sparsebody/trackers/synthesis.hpp"
+#include "sparsebody/recordings/bvh.hpp"
+#include "sparsebody/recordings/tracker_csv.hpp"
+#include "sparsebody/recordings/tracker_synthesis.hpp"
 
 using namespace sparsebody;
 
@@ -112,13 +112,13 @@ bool ends_with(const std::string& s, const char* e) {
 
 // Ground truth of a BVH clip at one frame: world positions (metres, floor at 0) and local rotations.
 struct Truth {
-  const io::BvhClip* clip = nullptr;
+  const recordings::BvhClip* clip = nullptr;
   pose::JointMap map{};
   double units = 1, floor = 0;
   pose::BodyPose tmp;
   pose::Vec3Vector tr;
   pose::WorldPose w;
-  void init(const io::BvhClip& c, const pose::JointMap& m, double u, double f) {
+  void init(const recordings::BvhClip& c, const pose::JointMap& m, double u, double f) {
     clip = &c, map = m, units = u, floor = f;
     tmp.resize(c.skeleton.size());
     tr.resize(static_cast<std::size_t>(c.skeleton.size()));
@@ -138,7 +138,7 @@ struct Metrics {
 // The input, read once: tracker frames, and for a BVH clip the clip itself as ground truth.
 struct Input {
   std::vector<trackers::TrackerFrame> frames;
-  io::BvhClip clip;
+  recordings::BvhClip clip;
   Truth truth;
   bool have_truth = false;
   double leg = 0;  // BVH: the clip's leg length (m), to scale it to the standard skeleton
@@ -149,10 +149,10 @@ struct Input {
 void read_input(const Options& o, Input& in) {
   in.have_truth = ends_with(o.input, ".bvh") || ends_with(o.input, ".BVH");
   if (in.have_truth) {
-    in.clip = io::read_bvh(o.input);
+    in.clip = recordings::read_bvh(o.input);
     const pose::JointMap map = pose::JointMap::from_names(in.clip.skeleton, o.input);
-    const double units = trackers::guess_units(in.clip.skeleton, map);
-    trackers::SyntheticTrackers syn = trackers::synthesize_trackers(in.clip, map, units);
+    const double units = recordings::guess_units(in.clip.skeleton, map);
+    recordings::SyntheticTrackers syn = recordings::synthesize_trackers(in.clip, map, units);
     in.frames = std::move(syn.frames);
     in.leg = syn.leg;
     in.truth.init(in.clip, map, units, syn.floor);
@@ -160,7 +160,7 @@ void read_input(const Options& o, Input& in) {
     std::printf("input   %s: %d frames at %.1f fps, %d joints, units %.4g m, leg %.3f m\n", o.input.c_str(), in.clip.frames,
                 in.fps, in.clip.skeleton.size(), units, syn.leg);
   } else {
-    in.frames = io::read_tracker_csv(o.input);
+    in.frames = recordings::read_tracker_csv(o.input);
     if (in.frames.empty()) throw std::runtime_error(o.input + ": no frames");
     in.fps = in.frames.size() > 1 ? (in.frames.size() - 1) / (in.frames.back().time - in.frames.front().time) : 30;
     std::printf("input   %s: %zu tracker frames (~%.1f fps)\n", o.input.c_str(), in.frames.size(), in.fps);
@@ -170,8 +170,8 @@ void read_input(const Options& o, Input& in) {
   for (const auto& f : in.frames) in.pelvis = in.pelvis || f.valid[static_cast<int>(trackers::Tracker::Pelvis)];
   if (!o.trackers_out.empty()) {
     auto xr = in.frames;
-    if (in.have_truth) trackers::to_openxr_convention(xr);
-    io::write_tracker_csv(o.trackers_out, xr,
+    if (in.have_truth) recordings::to_openxr_convention(xr);
+    recordings::write_tracker_csv(o.trackers_out, xr,
                           in.have_truth ? "synthesised from " + o.input + "; T-pose calibration frame 0" : "copy of " + o.input);
     std::printf("wrote   %s (%s trackers, OpenXR convention)\n", o.trackers_out.c_str(), in.have_truth ? "synthesised" : "input");
   }
@@ -240,7 +240,7 @@ int run(const Options& o, Pipeline& pipe, Input& in, const std::string& credit) 
   const pose::Skeleton& std_skel = pipe.skeleton();
   const pose::JointMap& std_map = pipe.joint_map();
   const std::vector<trackers::TrackerFrame>& frames = in.frames;
-  const io::BvhClip& clip = in.clip;
+  const recordings::BvhClip& clip = in.clip;
   Truth& truth = in.truth;
   const bool have_truth = in.have_truth;
   if (have_truth) {
@@ -260,7 +260,7 @@ int run(const Options& o, Pipeline& pipe, Input& in, const std::string& credit) 
   if (!credit.empty()) std::printf("weights credit: %s\n", credit.c_str());
 
   const double user = pipe.user_scale();
-  io::BvhWriter writer(std_skel, 1.0 / pipe.meta().frame_rate, 100.0 * user);
+  recordings::BvhWriter writer(std_skel, 1.0 / pipe.meta().frame_rate, 100.0 * user);
   // roles compared with the ground truth (all mapped joints), lower body subset, toes
   const pose::Role roles[] = {pose::Role::Hips, pose::Role::Head, pose::Role::HandL, pose::Role::HandR, pose::Role::UpLegL,
                               pose::Role::UpLegR, pose::Role::LegL, pose::Role::LegR, pose::Role::FootL, pose::Role::FootR,

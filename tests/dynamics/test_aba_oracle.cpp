@@ -17,7 +17,7 @@ using namespace sparsebody::dynamics;
 
 // root_damping: implicit root servo damping K_r (diagonal), added to the root block of M + h Kd.
 template <class Model>
-static double abaVsCrba(const Model& m, int trials, double h, unsigned seed, const Vec6<double>* root_damping = nullptr) {
+static double aba_vs_crba(const Model& m, int trials, double h, unsigned seed, const Vec6<double>* root_damping = nullptr) {
   Data<double, Model::kMaxBodies, Model::kMaxDofs> d(m);
   std::mt19937 rng(seed);
   std::normal_distribution<double> n(0.0, 1.0);
@@ -25,7 +25,7 @@ static double abaVsCrba(const Model& m, int trials, double h, unsigned seed, con
   typename Model::VecV qd, tau, qdd, zero = Model::VecV::Zero(m.nv), C;
   double worst = 0;
   for (int t = 0; t < trials; ++t) {
-    dyn_test::randomState(m, rng, q, qd);
+    dyn_test::random_state(m, rng, q, qd);
     tau.resize(m.nv);
     for (int k = 0; k < m.nv; ++k) tau(k) = 20 * n(rng);
     REQUIRE(aba(m, d, q, qd, tau, qdd, h, true, root_damping));
@@ -34,7 +34,7 @@ static double abaVsCrba(const Model& m, int trials, double h, unsigned seed, con
     Eigen::MatrixXd M = d.Mass;
     for (int i = 0; i < m.nb; ++i) {
       const auto& b = m.bodies[i];
-      for (int k = 0; k < jointNv(b.joint); ++k) M(b.v_index + k, b.v_index + k) += h * (b.kd + b.damping);
+      for (int k = 0; k < joint_nv(b.joint); ++k) M(b.v_index + k, b.v_index + k) += h * (b.kd + b.damping);
       if (b.joint == JointType::Free && root_damping)
         for (int k = 0; k < 6; ++k) M(b.v_index + k, b.v_index + k) += h * (*root_damping)(k);
     }
@@ -51,36 +51,36 @@ static double abaVsCrba(const Model& m, int trials, double h, unsigned seed, con
 }
 
 TEST_CASE("ABA == (M + h Kd)^-1 (tau - C) on the 34-DoF humanoid3d-like tree") {
-  const auto m = character::humanoid3dLike<double>();
+  const auto m = character::humanoid3d_like<double>();
   CHECK(m.nv == 34);
-  const double e0 = abaVsCrba(m, 1000, 0.0, 7);
-  const double e1 = abaVsCrba(m, 1000, 1.0 / 120, 8);
+  const double e0 = aba_vs_crba(m, 1000, 0.0, 7);
+  const double e1 = aba_vs_crba(m, 1000, 1.0 / 120, 8);
   std::printf("[aba-oracle] humanoid34: max rel err h=0 %.2e, h=1/120 %.2e\n", e0, e1);
   CHECK(e0 <= 1e-10);
   CHECK(e1 <= 1e-10);
 }
 
 TEST_CASE("ABA == (M + h Kd)^-1 (tau - C) on the default avatar") {
-  const auto m = character::defaultAvatar<double>();
-  const double e0 = abaVsCrba(m, 1000, 0.0, 9);
-  const double e1 = abaVsCrba(m, 1000, 1.0 / 120, 10);
+  const auto m = character::default_avatar<double>();
+  const double e0 = aba_vs_crba(m, 1000, 0.0, 9);
+  const double e1 = aba_vs_crba(m, 1000, 1.0 / 120, 10);
   std::printf("[aba-oracle] avatar (%d DoF): max rel err h=0 %.2e, h=1/120 %.2e\n", m.nv, e0, e1);
   CHECK(e0 <= 1e-10);
   CHECK(e1 <= 1e-10);
 }
 
 TEST_CASE("ABA with implicit root servo damping == (M + h (Kd + K_r))^-1 (tau - C) on the default avatar") {
-  const auto m = character::defaultAvatar<double>();
+  const auto m = character::default_avatar<double>();
   Vec6<double> kr;
   kr << 50, 60, 70, 300, 400, 500;  // N m s/rad on the angular, N s/m on the linear DoFs
-  const double e = abaVsCrba(m, 1000, 1.0 / 120, 11, &kr);
-  const double e_plain = abaVsCrba(m, 1, 1.0 / 120, 11);
+  const double e = aba_vs_crba(m, 1000, 1.0 / 120, 11, &kr);
+  const double e_plain = aba_vs_crba(m, 1, 1.0 / 120, 11);
   // The oracle must see the root damping: without it in ABA the same states disagree.
   Data<double, 24, 72> d(m);
   std::mt19937 rng(11);
   std::decay_t<decltype(m)>::VecQ q;
   std::decay_t<decltype(m)>::VecV qd, tau = std::decay_t<decltype(m)>::VecV::Constant(m.nv, 5.0), a, b;
-  dyn_test::randomState(m, rng, q, qd);
+  dyn_test::random_state(m, rng, q, qd);
   aba(m, d, q, qd, tau, a, 1.0 / 120);
   aba(m, d, q, qd, tau, b, 1.0 / 120, true, &kr);
   std::printf("[aba-oracle] avatar with root damping: max rel err %.2e (without: %.2e); root qdd changed by %.2e\n", e, e_plain,

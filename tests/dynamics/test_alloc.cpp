@@ -12,8 +12,8 @@ using namespace sparsebody;
 using namespace sparsebody::dynamics;
 
 template <class S>
-static void checkNoAlloc(bool root_servo) {
-  const auto m = character::defaultAvatar<S>();
+static void check_no_alloc(bool root_servo) {
+  const auto m = character::default_avatar<S>();
   Simulator<S, 24, 72> sim(m);
   if (root_servo) {  // the root servo's implicit damping and bounded re-solves
     sim.root_servo.enabled = true;
@@ -26,7 +26,7 @@ static void checkNoAlloc(bool root_servo) {
   }
   auto q = sim.q();
   q(1) += S(0.005);  // feet just above the floor: contact candidates every step
-  sim.setState(q, sim.v());
+  sim.set_state(q, sim.v());
   auto qdd = sim.v();
   auto tau = sim.v();
   Data<S, 24, 72> d(m);
@@ -34,7 +34,7 @@ static void checkNoAlloc(bool root_servo) {
   {
     sparsebody_test::AllocationCounter c;
     for (int k = 0; k < 240; ++k) {
-      sim.setTarget(m.find("UpperArm_L"), quatExp(Vec3<S>(S(0.3), S(0), S(0.01) * S(k))));
+      sim.set_target(m.find("UpperArm_L"), quat_exp(Vec3<S>(S(0.3), S(0), S(0.01) * S(k))));
       (void)sim.step(S(1.0 / 120));
     }
     aba(m, d, sim.q(), sim.v(), tau, qdd, S(1.0 / 120));
@@ -42,13 +42,13 @@ static void checkNoAlloc(bool root_servo) {
     crba(m, d, sim.q());
     n = c.count();
   }
-  CHECK(sim.numContacts() > 0);
+  CHECK(sim.num_contacts() > 0);
   CHECK(n == 0);
 }
 
 TEST_CASE("step, ABA, RNEA and CRBA do not allocate (double and float, with and without the root servo)") {
   for (bool servo : {false, true}) {
-    checkNoAlloc<double>(servo);
-    checkNoAlloc<float>(servo);
+    check_no_alloc<double>(servo);
+    check_no_alloc<float>(servo);
   }
 }

@@ -12,8 +12,8 @@ using namespace sparsebody::dynamics;
 using M = Model<double, 24, 72>;
 
 TEST_CASE("model JSON round-trips the default avatar") {
-  const M a = character::defaultAvatar<double>();
-  const M b = parseModelJson<double, 24, 72>(modelToJson(a), "avatar.json");
+  const M a = character::default_avatar<double>();
+  const M b = parse_model_json<double, 24, 72>(model_to_json(a), "avatar.json");
   REQUIRE(b.nb == a.nb);
   CHECK(b.nv == a.nv);
   CHECK(b.nq == a.nq);
@@ -25,16 +25,16 @@ TEST_CASE("model JSON round-trips the default avatar") {
   }
   // same dynamics
   Data<double, 24, 72> da(a), db(b);
-  M::VecQ q = a.neutralConfiguration();
+  M::VecQ q = a.neutral_configuration();
   M::VecV qd = M::VecV::Constant(a.nv, 0.3), tau = M::VecV::Constant(a.nv, 1.0), qa, qb;
   aba(a, da, q, qd, tau, qa, 0.01);
   aba(b, db, q, qd, tau, qb, 0.01);
   CHECK((qa - qb).norm() < 1e-12 * qa.norm());
 }
 
-static std::string errorOf(const std::string& text) {
+static std::string error_of(const std::string& text) {
   try {
-    parseModelJson<double, 24, 72>(text, "bad.json");
+    parse_model_json<double, 24, 72>(text, "bad.json");
   } catch (const LoadError& e) {
     return e.what();
   }
@@ -44,34 +44,34 @@ static std::string errorOf(const std::string& text) {
 TEST_CASE("model JSON validation names the file, the body and the field") {
   const std::string root = R"({"name":"Hips","parent":null,"joint":"free","mass":10,"inertia":[1,1,1,0,0,0]})";
   auto doc = [&](const std::string& second) { return R"({"bodies":[)" + root + "," + second + "]}"; };
-  std::string e = errorOf(doc(R"({"name":"Leg","parent":"Hips","joint":"spherical","mass":-1,"inertia":[1,1,1,0,0,0]})"));
+  std::string e = error_of(doc(R"({"name":"Leg","parent":"Hips","joint":"spherical","mass":-1,"inertia":[1,1,1,0,0,0]})"));
   CHECK(e.find("bad.json") == 0);
   CHECK(e.find("bodies[1] 'Leg'") != std::string::npos);
   CHECK(e.find("'mass'") != std::string::npos);
-  e = errorOf(doc(R"({"name":"Leg","parent":"Nope","joint":"spherical","mass":1,"inertia":[1,1,1,0,0,0]})"));
+  e = error_of(doc(R"({"name":"Leg","parent":"Nope","joint":"spherical","mass":1,"inertia":[1,1,1,0,0,0]})"));
   CHECK(e.find("'parent'") != std::string::npos);
   CHECK(e.find("Nope") != std::string::npos);
-  e = errorOf(doc(R"({"name":"Leg","parent":"Hips","joint":"hinge","mass":1,"inertia":[1,1,1,0,0,0]})"));
+  e = error_of(doc(R"({"name":"Leg","parent":"Hips","joint":"hinge","mass":1,"inertia":[1,1,1,0,0,0]})"));
   CHECK(e.find("'joint'") != std::string::npos);
-  e = errorOf(doc(R"({"name":"Leg","parent":"Hips","joint":"revolute","mass":1,"inertia":[1,1,1,0,0,0]})"));
+  e = error_of(doc(R"({"name":"Leg","parent":"Hips","joint":"revolute","mass":1,"inertia":[1,1,1,0,0,0]})"));
   CHECK(e.find("'axis'") != std::string::npos);
-  e = errorOf(doc(R"({"name":"Leg","parent":"Hips","joint":"spherical","mass":1,"inertia":[1,1,5,0,0,0]})"));
+  e = error_of(doc(R"({"name":"Leg","parent":"Hips","joint":"spherical","mass":1,"inertia":[1,1,5,0,0,0]})"));
   CHECK(e.find("triangle inequality") != std::string::npos);
-  e = errorOf(doc(R"({"name":"Leg","parent":"Hips","joint":"spherical","mass":1,"inertia":[1,1,1]})"));
+  e = error_of(doc(R"({"name":"Leg","parent":"Hips","joint":"spherical","mass":1,"inertia":[1,1,1]})"));
   CHECK(e.find("'inertia'") != std::string::npos);
-  e = errorOf(doc(R"({"name":"Leg","parent":"Hips","joint":"spherical","mas":1,"inertia":[1,1,1,0,0,0]})"));
+  e = error_of(doc(R"({"name":"Leg","parent":"Hips","joint":"spherical","mas":1,"inertia":[1,1,1,0,0,0]})"));
   CHECK(e.find("'mas'") != std::string::npos);
-  e = errorOf(doc(R"({"name":"Leg","parent":"Hips","joint":"spherical","mass":1,"inertia":[1,1,1,0,0,0],"shapes":[{"type":"box","half_extents":[0.1,0,0.1]}]})"));
+  e = error_of(doc(R"({"name":"Leg","parent":"Hips","joint":"spherical","mass":1,"inertia":[1,1,1,0,0,0],"shapes":[{"type":"box","half_extents":[0.1,0,0.1]}]})"));
   CHECK(e.find("shapes[0]") != std::string::npos);
   CHECK(e.find("half_extents") != std::string::npos);
-  e = errorOf(doc(R"({"name":"Leg","parent":"Hips","joint":"free","mass":1,"inertia":[1,1,1,0,0,0]})"));
+  e = error_of(doc(R"({"name":"Leg","parent":"Hips","joint":"free","mass":1,"inertia":[1,1,1,0,0,0]})"));
   CHECK(e.find("free joint") != std::string::npos);
-  CHECK(errorOf("{not json").find("invalid JSON") != std::string::npos);
-  CHECK(errorOf(doc(R"({"name":"Leg","parent":"Hips","joint":"spherical","mass":1,"inertia":[1,1,1,0,0,0]})")).empty());
+  CHECK(error_of("{not json").find("invalid JSON") != std::string::npos);
+  CHECK(error_of(doc(R"({"name":"Leg","parent":"Hips","joint":"spherical","mass":1,"inertia":[1,1,1,0,0,0]})")).empty());
   // compile-time bounds
   std::string many = R"({"bodies":[)" + root;
   for (int i = 0; i < 30; ++i)
     many += R"(,{"name":"B)" + std::to_string(i) + R"(","parent":"Hips","joint":"fixed","mass":1,"inertia":[1,1,1,0,0,0]})";
   many += "]}";
-  CHECK(errorOf(many).find("MaxBodies") != std::string::npos);
+  CHECK(error_of(many).find("MaxBodies") != std::string::npos);
 }

@@ -21,9 +21,9 @@ using namespace sparsebody;
 using namespace sparsebody::dynamics;
 
 template <class Model>
-static mjModel* loadExport(const Model& m, const MjcfOptions& o, const std::string& tag) {
+static mjModel* load_export(const Model& m, const MjcfOptions& o, const std::string& tag) {
   const std::string path = std::string(SPARSEBODY_BINARY_DIR) + "/dyn_" + tag + ".xml";
-  std::ofstream(path) << toMjcf(m, o);
+  std::ofstream(path) << to_mjcf(m, o);
   char err[1000] = "";
   mjModel* mm = mj_loadXML(path.c_str(), nullptr, err, sizeof err);
   if (!mm) std::printf("MuJoCo load error: %s\n", err);
@@ -34,22 +34,22 @@ static mjModel* loadExport(const Model& m, const MjcfOptions& o, const std::stri
 // matched by name (the exporter names each joint after its body).
 static std::vector<int> g_qperm, g_vperm;
 template <class Model>
-static void buildPerm(const Model& m, const mjModel* mm) {
+static void build_perm(const Model& m, const mjModel* mm) {
   g_qperm.assign(m.nq, -1);
   g_vperm.assign(m.nv, -1);
   for (int i = 0; i < m.nb; ++i) {
     const auto& b = m.bodies[i];
-    if (jointNv(b.joint) == 0) continue;
+    if (joint_nv(b.joint) == 0) continue;
     const int j = mj_name2id(mm, mjOBJ_JOINT, m.names[i].c_str());
     REQUIRE(j >= 0);
-    for (int k = 0; k < jointNq(b.joint); ++k) g_qperm[b.q_index + k] = mm->jnt_qposadr[j] + k;
-    for (int k = 0; k < jointNv(b.joint); ++k) g_vperm[b.v_index + k] = mm->jnt_dofadr[j] + k;
+    for (int k = 0; k < joint_nq(b.joint); ++k) g_qperm[b.q_index + k] = mm->jnt_qposadr[j] + k;
+    for (int k = 0; k < joint_nv(b.joint); ++k) g_vperm[b.v_index + k] = mm->jnt_dofadr[j] + k;
   }
 }
 
 // Our generalized vector (velocity/acceleration/force layout) to MuJoCo's, given root rotation R.
 template <class Model, class Vec>
-static void toMj(const Model& m, const Mat3<double>& R, const Vec& x, double* out, const Vec3<double>* accel_w = nullptr,
+static void to_mj(const Model& m, const Mat3<double>& R, const Vec& x, double* out, const Vec3<double>* accel_w = nullptr,
                  const Vec3<double>* accel_v = nullptr, bool force = false) {
   for (int k = 0; k < m.nv; ++k) out[g_vperm[k]] = x(k);
   if (m.bodies[0].joint == JointType::Free) {  // the root's DoFs are 0..5 in both
@@ -62,17 +62,17 @@ static void toMj(const Model& m, const Mat3<double>& R, const Vec& x, double* ou
 }
 
 template <class Model>
-static void crossCheck(const Model& m, const char* tag, unsigned seed) {
+static void cross_check(const Model& m, const char* tag, unsigned seed) {
   MjcfOptions o;
   o.contact = false;
-  mjModel* mm = loadExport(m, o, tag);
+  mjModel* mm = load_export(m, o, tag);
   REQUIRE(mm != nullptr);
   o.servo_damping = true;
-  mjModel* mmd = loadExport(m, o, std::string(tag) + "_damped");
+  mjModel* mmd = load_export(m, o, std::string(tag) + "_damped");
   REQUIRE(mmd != nullptr);
   REQUIRE(mm->nv == m.nv);
   REQUIRE(mm->nq == m.nq);
-  buildPerm(m, mm);
+  build_perm(m, mm);
   mjData* md = mj_makeData(mm);
   mjData* mdd = mj_makeData(mmd);
   Data<double, Model::kMaxBodies, Model::kMaxDofs> d(m);
@@ -84,19 +84,19 @@ static void crossCheck(const Model& m, const char* tag, unsigned seed) {
   double worst_acc = 0, worst_id = 0, worst_imp = 0;
   const double h = o.timestep;
   for (int t = 0; t < 300; ++t) {
-    dyn_test::randomState(m, rng, q, qd);
+    dyn_test::random_state(m, rng, q, qd);
     tau.resize(m.nv);
     for (int k = 0; k < m.nv; ++k) tau(k) = 10 * n(rng);
     // --- forward dynamics, no damping
     REQUIRE(aba(m, d, q, qd, tau, qdd, 0.0));
-    forwardKinematics(m, d, q, &qd);
+    forward_kinematics(m, d, q, &qd);
     const Mat3<double> R = d.R[0];
     const Vec3<double> w0 = qd.template head<3>(), v0 = qd.template segment<3>(3);
     for (int k = 0; k < m.nq; ++k) md->qpos[g_qperm[k]] = q(k);
-    toMj(m, R, qd, md->qvel);
-    toMj(m, R, tau, md->qfrc_applied, nullptr, nullptr, true);
+    to_mj(m, R, qd, md->qvel);
+    to_mj(m, R, tau, md->qfrc_applied, nullptr, nullptr, true);
     mj_forward(mm, md);
-    toMj(m, R, qdd, buf.data(), &w0, &v0);
+    to_mj(m, R, qdd, buf.data(), &w0, &v0);
     double num = 0, den = 0;
     for (int k = 0; k < m.nv; ++k) { num += (buf[k] - md->qacc[k]) * (buf[k] - md->qacc[k]); den += md->qacc[k] * md->qacc[k]; }
     worst_acc = std::max(worst_acc, std::sqrt(num / den));
@@ -104,9 +104,9 @@ static void crossCheck(const Model& m, const char* tag, unsigned seed) {
     typename Model::VecV a(m.nv);
     for (int k = 0; k < m.nv; ++k) a(k) = 5 * n(rng);
     rnea(m, d, q, qd, a, tau_id);
-    toMj(m, R, a, md->qacc, &w0, &v0);
+    to_mj(m, R, a, md->qacc, &w0, &v0);
     mj_rne(mm, md, 1, rne.data());
-    toMj(m, R, tau_id, buf.data(), nullptr, nullptr, true);
+    to_mj(m, R, tau_id, buf.data(), nullptr, nullptr, true);
     num = den = 0;
     for (int k = 0; k < m.nv; ++k) { num += (buf[k] - rne[k]) * (buf[k] - rne[k]); den += rne[k] * rne[k]; }
     worst_id = std::max(worst_id, std::sqrt(num / den));
@@ -114,15 +114,15 @@ static void crossCheck(const Model& m, const char* tag, unsigned seed) {
     typename Model::VecV tau_pd = tau;
     for (int i = 0; i < m.nb; ++i) {
       const auto& b = m.bodies[i];
-      for (int k = 0; k < jointNv(b.joint); ++k) tau_pd(b.v_index + k) -= (b.kd + b.damping) * qd(b.v_index + k);
+      for (int k = 0; k < joint_nv(b.joint); ++k) tau_pd(b.v_index + k) -= (b.kd + b.damping) * qd(b.v_index + k);
     }
     REQUIRE(aba(m, d, q, qd, tau_pd, qdd, h));
     for (int k = 0; k < m.nq; ++k) mdd->qpos[g_qperm[k]] = q(k);
-    toMj(m, R, qd, mdd->qvel);
-    toMj(m, R, tau, mdd->qfrc_applied, nullptr, nullptr, true);
+    to_mj(m, R, qd, mdd->qvel);
+    to_mj(m, R, tau, mdd->qfrc_applied, nullptr, nullptr, true);
     std::vector<double> qvel0(mdd->qvel, mdd->qvel + m.nv);
     mj_step(mmd, mdd);
-    toMj(m, R, qdd, buf.data(), &w0, &v0);
+    to_mj(m, R, qdd, buf.data(), &w0, &v0);
     num = den = 0;
     for (int k = 0; k < m.nv; ++k) {
       const double acc = (mdd->qvel[k] - qvel0[k]) / h;
@@ -143,8 +143,8 @@ static void crossCheck(const Model& m, const char* tag, unsigned seed) {
 }
 
 TEST_CASE("MuJoCo 2.2.2 agrees on the 34-DoF humanoid3d-like tree") {
-  crossCheck(character::humanoid3dLike<double>(), "humanoid34", 11);
+  cross_check(character::humanoid3d_like<double>(), "humanoid34", 11);
 }
 TEST_CASE("MuJoCo 2.2.2 agrees on the default avatar") {
-  crossCheck(character::defaultAvatar<double>(), "avatar", 12);
+  cross_check(character::default_avatar<double>(), "avatar", 12);
 }

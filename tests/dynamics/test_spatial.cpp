@@ -19,13 +19,13 @@ TEST_CASE("spatial: transforms and inertia shifts match the 6x6 matrices") {
     for (int k = 0; k < 6; ++k) { m(k) = n(rng); f(k) = n(rng); }
     const Mat6<double> Xm = X.matrix();
     CHECK((X.apply(m) - Xm * m).norm() < 1e-12);
-    CHECK((X.applyInverse(X.apply(m)) - m).norm() < 1e-12);
-    CHECK((X.applyTransposeForce(f) - Xm.transpose() * f).norm() < 1e-12);
+    CHECK((X.apply_inverse(X.apply(m)) - m).norm() < 1e-12);
+    CHECK((X.apply_transpose_force(f) - Xm.transpose() * f).norm() < 1e-12);
     // X^T I X with a random SPD I
     Mat6<double> A = Mat6<double>::Random();
     Mat6<double> I = A * A.transpose();
     Mat6<double> out = Mat6<double>::Zero();
-    addTransformedInertia(X, I, out);
+    add_transformed_inertia(X, I, out);
     CHECK((out - Xm.transpose() * I * Xm).norm() < 1e-10 * I.norm());
     // composition
     Transform<double> Y;
@@ -35,15 +35,15 @@ TEST_CASE("spatial: transforms and inertia shifts match the 6x6 matrices") {
     // cross products: (v x*) = -(v x)^T
     Vec6<double> v;
     for (int k = 0; k < 6; ++k) v(k) = n(rng);
-    CHECK(std::abs(crossForce(v, f).dot(m) + f.dot(crossMotion(v, m))) < 1e-12);
+    CHECK(std::abs(cross_force(v, f).dot(m) + f.dot(cross_motion(v, m))) < 1e-12);
   }
 }
 
 TEST_CASE("spatial: quaternion exp/log round trip") {
   for (double a : {1e-9, 1e-4, 0.3, 2.0, 3.1}) {
     Vec3<double> w = Vec3<double>(0.3, -0.5, 0.8).normalized() * a;
-    CHECK((quatLog(quatExp(w)) - w).norm() < 1e-12);
-    CHECK(std::abs(quatExp(w).norm() - 1) < 1e-15);
+    CHECK((quat_log(quat_exp(w)) - w).norm() < 1e-12);
+    CHECK(std::abs(quat_exp(w).norm() - 1) < 1e-15);
   }
 }
 
@@ -53,7 +53,7 @@ TEST_CASE("spatial: quaternion exp/log round trip") {
 #include "test_util.hpp"
 
 TEST_CASE("body and point Jacobians reproduce FK velocities") {
-  const auto m = sparsebody::character::defaultAvatar<double>();
+  const auto m = sparsebody::character::default_avatar<double>();
   using Mo = std::decay_t<decltype(m)>;
   Data<double, 24, 72> d(m);
   std::mt19937 rng(21);
@@ -61,18 +61,18 @@ TEST_CASE("body and point Jacobians reproduce FK velocities") {
   Mo::VecV qd;
   double worst = 0;
   for (int t = 0; t < 50; ++t) {
-    dyn_test::randomState(m, rng, q, qd);
-    forwardKinematics(m, d, q, &qd);
+    dyn_test::random_state(m, rng, q, qd);
+    forward_kinematics(m, d, q, &qd);
     for (int i = 0; i < m.nb; ++i) {
       const Vec3<double> p(0.05, -0.02, 0.1);
       Eigen::Matrix<double, 6, Eigen::Dynamic> J(6, m.nv);
-      bodyJacobian(m, d, i, p, J);
+      body_jacobian(m, d, i, p, J);
       Eigen::Matrix<double, 6, 1> ref;
       ref.head<3>() = d.R[i] * d.v[i].head<3>();
-      ref.tail<3>() = pointVelocity(d, i, p);
+      ref.tail<3>() = point_velocity(d, i, p);
       worst = std::max(worst, (J * qd - ref).norm() / std::max(1.0, ref.norm()));
       Eigen::Matrix<double, 3, Eigen::Dynamic> Jp(3, m.nv);
-      pointJacobian(m, d, i, p, Jp);
+      point_jacobian(m, d, i, p, Jp);
       worst = std::max(worst, (Jp * qd - ref.tail<3>()).norm() / std::max(1.0, ref.norm()));
     }
   }
@@ -80,7 +80,7 @@ TEST_CASE("body and point Jacobians reproduce FK velocities") {
 }
 
 TEST_CASE("float ABA agrees with double ABA") {
-  const auto md = sparsebody::character::defaultAvatar<double>();
+  const auto md = sparsebody::character::default_avatar<double>();
   const auto mf = md.cast<float>();
   Data<double, 24, 72> dd(md);
   Data<float, 24, 72> df(mf);
@@ -90,7 +90,7 @@ TEST_CASE("float ABA agrees with double ABA") {
   Mo::VecV qd, tau, qdd;
   double worst = 0;
   for (int t = 0; t < 100; ++t) {
-    dyn_test::randomState(md, rng, q, qd);
+    dyn_test::random_state(md, rng, q, qd);
     tau = Mo::VecV::Constant(md.nv, 5.0);
     aba(md, dd, q, qd, tau, qdd, 1.0 / 120);
     decltype(mf)::VecQ qf = q.cast<float>();

@@ -8,7 +8,7 @@ namespace dyn_test {
 using namespace sparsebody::dynamics;
 
 template <class Model>
-void randomState(const Model& m, std::mt19937& rng, typename Model::VecQ& q, typename Model::VecV& qd,
+void random_state(const Model& m, std::mt19937& rng, typename Model::VecQ& q, typename Model::VecV& qd,
                  double vel_scale = 2.0) {
   std::normal_distribution<double> n(0.0, 1.0);
   std::uniform_real_distribution<double> u(-1.5, 1.5);
@@ -16,7 +16,7 @@ void randomState(const Model& m, std::mt19937& rng, typename Model::VecQ& q, typ
   qd.resize(m.nv);
   for (int i = 0; i < m.nb; ++i) {
     const auto& b = m.bodies[i];
-    auto randQuat = [&](int k) {
+    auto rand_quat = [&](int k) {
       Eigen::Vector4d v(n(rng), n(rng), n(rng), n(rng));
       v.normalize();
       for (int j = 0; j < 4; ++j) q(k + j) = v(j);
@@ -24,9 +24,9 @@ void randomState(const Model& m, std::mt19937& rng, typename Model::VecQ& q, typ
     switch (b.joint) {
       case JointType::Free:
         for (int j = 0; j < 3; ++j) q(b.q_index + j) = u(rng);
-        randQuat(b.q_index + 3);
+        rand_quat(b.q_index + 3);
         break;
-      case JointType::Spherical: randQuat(b.q_index); break;
+      case JointType::Spherical: rand_quat(b.q_index); break;
       case JointType::Revolute: q(b.q_index) = u(rng) * 2; break;
       default: break;
     }
@@ -35,7 +35,7 @@ void randomState(const Model& m, std::mt19937& rng, typename Model::VecQ& q, typ
 }
 
 template <class A, class B>
-double relErr(const A& a, const B& b) {
+double rel_err(const A& a, const B& b) {
   return (a - b).norm() / std::max(1.0, double(b.norm()));
 }
 }  // namespace dyn_test

@@ -6,7 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "sparsebody/avatar/n3p_predictor.hpp"
+#include "sparsebody/predict/n3p_predictor.hpp"
 
 namespace n3p_test {
 
@@ -20,7 +20,7 @@ inline nlohmann::json read_json(const std::string& path) {
 }
 
 // The random small predictor of the golden (hidden 16, 24, 24).
-using SmallPredictor = sparsebody::avatar::N3PPredictor<float, 16, 24, 24>;
+using SmallPredictor = sparsebody::predict::N3PPredictor<float, 16, 24, 24>;
 
 // Tracker set of golden frame t.
 inline sparsebody::features::n3p::TrackerSet golden_trackers(const nlohmann::json& g, int t) {

@@ -79,5 +79,5 @@ TEST_CASE("n3p weights: meta is checked") {
   CHECK(w.up->info().kind == "n3p_upper");
   CHECK_THROWS_AS(n3p_test::SmallPredictor::load(n3p_test::golden_dir() + "/missing"), LoadError);
   // wrong hidden size for the file
-  CHECK_THROWS_AS((avatar::N3PPredictor<float, 64, 128, 128>::load(n3p_test::small_prefix())), LoadError);
+  CHECK_THROWS_AS((predict::N3PPredictor<float, 64, 128, 128>::load(n3p_test::small_prefix())), LoadError);
 }

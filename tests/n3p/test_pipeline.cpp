@@ -117,7 +117,7 @@ TEST_CASE("n3p calibration (§7): T-pose offsets put the devices' joints at the 
   // a user 10 % taller than the standard skeleton, facing -Z (OpenXR), controllers 8 cm off the wrists
   const double user = 1.1, head_h = 1.378 * user;
   trackers::TrackerFrame f;
-  const Eigen::Matrix3d yaw = trackers::yaw_frame(Eigen::Vector3d(0, 0, -1), Eigen::Matrix3d::Identity());
+  const Eigen::Matrix3d yaw = features::yaw_frame(Eigen::Vector3d(0, 0, -1), Eigen::Matrix3d::Identity());
   const Eigen::Vector3d head(0.3, head_h, 2.0);
   const Eigen::Quaterniond qh = Eigen::Quaterniond::Identity();  // OpenXR: the headset looks along its -Z
   f.pose[0] = {trackers::to_xr(qh), trackers::to_xr(head)};

@@ -46,7 +46,7 @@ TEST_CASE("n3p physics: no allocation per simulation step (controller + correcti
   dynamics::Simulator<float, 24, 72> sim(m);
   control::ModelBasedController<float, 24, 72> ctl(m);
   control::TrackerCorrection<float, 24, 72> tc(m);
-  auto q0 = m.neutralConfiguration();
+  auto q0 = m.neutral_configuration();
   q0(1) += 0.01f;
   const double contact[2] = {1, 1};
   ctl.config().stance_support = true;

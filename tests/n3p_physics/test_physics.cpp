@@ -31,7 +31,7 @@ TEST_CASE("n3p physics retarget: q -> pose -> q is exact; the standing pose stan
   pose::BodyPose pose;
   pose.resize(p.skeleton().size());
   for (int trial = 0; trial < 20; ++trial) {
-    Physics::VecQ q = m.neutralConfiguration(), back = q;
+    Physics::VecQ q = m.neutral_configuration(), back = q;
     for (int i = 0; i < m.nb; ++i) {
       const auto& b = m.bodies[i];
       if (b.joint == dynamics::JointType::Revolute) {
@@ -51,7 +51,7 @@ TEST_CASE("n3p physics retarget: q -> pose -> q is exact; the standing pose stan
   }
   // The avatar's reference pose (straight, soles on the floor) is the skeleton standing straight
   // at meta.standing_hips_height: q -> pose puts the root there, and the hips upright.
-  const Physics::VecQ q = m.neutralConfiguration();
+  const Physics::VecQ q = m.neutral_configuration();
   r.to_pose(m, q, pose);
   pose::WorldPose wp;
   wp.resize(p.skeleton().size());
@@ -116,9 +116,9 @@ TEST_CASE("n3p physics: tracker correction turns F into arm torques that move th
   const auto& m = p.model();
   control::TrackerCorrection<float, 24, 72> tc(m);
   dynamics::Data<float, 24, 72> d(m);
-  Physics::VecQ q = m.neutralConfiguration();
+  Physics::VecQ q = m.neutral_configuration();
   Physics::VecV v = Physics::VecV::Zero(m.nv), tau = Physics::VecV::Zero(m.nv);
-  dynamics::forwardKinematics(m, d, q, &v);
+  dynamics::forward_kinematics(m, d, q, &v);
   const int h = tc.hand_body(0);
   const dynamics::Vec3<float> target[2] = {d.p[h] + dynamics::Vec3<float>(0, -0.1f, 0.05f), d.p[tc.hand_body(1)]};
   const bool present[2] = {true, false};
@@ -128,13 +128,13 @@ TEST_CASE("n3p physics: tracker correction turns F into arm torques that move th
   // Only the left arm chain is actuated, and J tau points along F (J J^T F . F > 0).
   Eigen::Matrix<float, 6, Eigen::Dynamic, 0, 6, 72> J(6, m.nv);
   const dynamics::Vec3<float> origin = dynamics::Vec3<float>::Zero();
-  dynamics::bodyJacobian(m, d, h, origin, J);
+  dynamics::body_jacobian(m, d, h, origin, J);
   const dynamics::Vec3<float> hand_motion = J.bottomRows<3>() * tau;
   CHECK(hand_motion.dot(target[0] - d.p[h]) > 0);
   for (int i = 0; i < m.nb; ++i) {
     const bool arm = m.names[i] == "Shoulder_L" || m.names[i] == "UpperArm_L" || m.names[i] == "LowerArm_L" || m.names[i] == "Hand_L";
     if (!arm)
-      for (int k = 0; k < m.nvOf(i); ++k) CHECK(tau(m.bodies[i].v_index + k) == 0);
+      for (int k = 0; k < m.nv_of(i); ++k) CHECK(tau(m.bodies[i].v_index + k) == 0);
   }
 }
 
@@ -220,13 +220,13 @@ TEST_CASE("n3p physics: ground_lift is how far the lowest contact point is below
   Physics p(n3p_physics_test::weights());
   const auto& m = p.model();
   control::ModelBasedController<float, 24, 72> ctl(m);
-  Physics::VecQ q = m.neutralConfiguration();
+  Physics::VecQ q = m.neutral_configuration();
   dynamics::Data<float, 24, 72> d(m);
   auto lowest = [&](const Physics::VecQ& x) {
-    dynamics::forwardKinematics(m, d, x, static_cast<const Physics::VecV*>(nullptr), true);
+    dynamics::forward_kinematics(m, d, x, static_cast<const Physics::VecV*>(nullptr), true);
     float lo = 1e9f;
     for (int k = 0; k < m.num_points; ++k)
-      lo = std::min(lo, dynamics::pointPosition(d, m.points[k].body, m.points[k].pos).y() - m.points[k].radius);
+      lo = std::min(lo, dynamics::point_position(d, m.points[k].body, m.points[k].pos).y() - m.points[k].radius);
     return lo;
   };
   q(1) += 0.3f - lowest(q);  // lowest point 0.3 m up: nothing to lift

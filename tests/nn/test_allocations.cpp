@@ -21,7 +21,7 @@ void check_no_alloc(std::shared_ptr<const sparsebody::nn::NetworkWeights<Net>> w
   for (int t = 0; t < steps; ++t) {
     for (int i = 0; i < Net::in_size; ++i) x[i] = static_cast<T>(golden_input(t, i));
     sink += double(net.step(x.data())[0]);
-    if (t % 3 == 0) sink += double(net.step_guarded(x.data()) == sparsebody::nn::StepStatus::kOk);
+    if (t % 3 == 0) sink += double(net.step_guarded(x.data()) == sparsebody::nn::NetStatus::Ok);
     if (t == steps / 2) net.reset();
   }
   const long long n = c.count();

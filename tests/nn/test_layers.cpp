@@ -205,22 +205,22 @@ TEST_CASE("step_guarded: NaN/Inf input is rejected without touching the state; a
   const float good[3] = {0.1f, -0.2f, 0.3f};
   const float nan_in[3] = {0.1f, std::numeric_limits<float>::quiet_NaN(), 0.3f};
   const float inf_in[3] = {std::numeric_limits<float>::infinity(), 0.f, 0.f};
-  CHECK(a.step_guarded(good) == nn::StepStatus::kOk);
+  CHECK(a.step_guarded(good) == nn::NetStatus::Ok);
   b.step(good);
   std::vector<float> before(a.output().data(), a.output().data() + 5);
-  CHECK(a.step_guarded(nan_in) == nn::StepStatus::kRejectedInput);
-  CHECK(a.step_guarded(inf_in) == nn::StepStatus::kRejectedInput);
+  CHECK(a.step_guarded(nan_in) == nn::NetStatus::RejectedInput);
+  CHECK(a.step_guarded(inf_in) == nn::NetStatus::RejectedInput);
   for (int i = 0; i < 5; ++i) CHECK(a.output()[i] == before[i]);
   // state untouched: the next good frame gives exactly what an instance that never saw NaN gives
-  CHECK(a.step_guarded(good) == nn::StepStatus::kOk);
+  CHECK(a.step_guarded(good) == nn::NetStatus::Ok);
   const float* yb = b.step(good);
   for (int i = 0; i < 5; ++i) CHECK(a.output()[i] == yb[i]);
   // a corrupted hidden state (NaN) is detected from the output and reset
   std::vector<float> last(a.output().data(), a.output().data() + 5);
   a.state().h[0][2] = std::numeric_limits<float>::quiet_NaN();
-  CHECK(a.step_guarded(good) == nn::StepStatus::kStateReset);
+  CHECK(a.step_guarded(good) == nn::NetStatus::StateReset);
   for (int i = 0; i < 5; ++i) CHECK(a.output()[i] == last[i]);
   for (int i = 0; i < 5; ++i) CHECK(a.state().h[0][i] == 0.f);
-  CHECK(a.step_guarded(good) == nn::StepStatus::kOk);
+  CHECK(a.step_guarded(good) == nn::NetStatus::Ok);
   for (int i = 0; i < 5; ++i) CHECK(std::isfinite(a.output()[i]));
 }

@@ -3,7 +3,7 @@
 
 #include <sstream>
 
-#include "sparsebody/io/bvh.hpp"
+#include "sparsebody/recordings/bvh.hpp"
 
 using namespace sparsebody;
 
@@ -40,9 +40,9 @@ Frame Time: 0.0083333
 0 90 0 0 90 0 0 0 0 5 0 0 0 0 0 45
 )";
 
-io::BvhClip parse(const std::string& s) {
+recordings::BvhClip parse(const std::string& s) {
   std::istringstream in(s);
-  return io::parse_bvh(in, "clip.bvh");
+  return recordings::parse_bvh(in, "clip.bvh");
 }
 
 std::string error_of(const std::string& s) {
@@ -62,7 +62,7 @@ std::string replace(std::string s, const std::string& a, const std::string& b) {
 }  // namespace
 
 TEST_CASE("BVH reader: hierarchy, channel orders and counts, forward kinematics") {
-  const io::BvhClip c = parse(kClip);
+  const recordings::BvhClip c = parse(kClip);
   REQUIRE(c.skeleton.size() == 4);
   CHECK(c.skeleton.names[3] == "Foot");
   CHECK(c.skeleton.parents[3] == 2);
@@ -92,14 +92,14 @@ TEST_CASE("BVH reader: hierarchy, channel orders and counts, forward kinematics"
 }
 
 TEST_CASE("BVH writer output reads back with the same world positions (Z X Y Euler round trip)") {
-  const io::BvhClip c = parse(kClip);
+  const recordings::BvhClip c = parse(kClip);
   pose::BodyPose p;
   p.resize(4);
   pose::Vec3Vector tr(4);
   pose::WorldPose w0, w1;
   w0.resize(4);
   w1.resize(4);
-  io::BvhWriter writer(c.skeleton, c.frame_time);
+  recordings::BvhWriter writer(c.skeleton, c.frame_time);
   for (int f = 0; f < c.frames; ++f) {
     c.local_pose(f, p, tr);
     p.local[1] = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())) * p.local[1];
@@ -107,7 +107,7 @@ TEST_CASE("BVH writer output reads back with the same world positions (Z X Y Eul
   }
   std::ostringstream out;
   writer.write(out);
-  const io::BvhClip back = parse(out.str());
+  const recordings::BvhClip back = parse(out.str());
   REQUIRE(back.skeleton.size() == 4);
   CHECK(back.frames == 2);
   for (int f = 0; f < c.frames; ++f) {
@@ -129,7 +129,7 @@ TEST_CASE("BVH writer output reads back with the same world positions (Z X Y Eul
 TEST_CASE("Z X Y Euler decomposition recovers the rotation") {
   for (int i = 0; i < 50; ++i) {
     const Eigen::Quaterniond q = Eigen::Quaterniond::UnitRandom();
-    const Eigen::Vector3d e = io::euler_zxy_degrees(q.toRotationMatrix()) * (M_PI / 180);
+    const Eigen::Vector3d e = recordings::euler_zxy_degrees(q.toRotationMatrix()) * (M_PI / 180);
     const Eigen::Matrix3d R = (Eigen::AngleAxisd(e.x(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(e.y(), Eigen::Vector3d::UnitX()) *
                                Eigen::AngleAxisd(e.z(), Eigen::Vector3d::UnitY())).toRotationMatrix();
     CHECK((R - q.toRotationMatrix()).norm() < 1e-9);
@@ -147,5 +147,5 @@ TEST_CASE("malformed BVH: LoadError names the file, the line and what was expect
   CHECK(error_of(replace(kClip, "  JOINT Leg", "  JIONT Leg")).find("line 15: expected ROOT, JOINT") != std::string::npos);
   CHECK(error_of(std::string(kClip).substr(0, 200)).find("unexpected end of file inside HIERARCHY") != std::string::npos);
   CHECK(error_of("").find("line 0: expected HIERARCHY") != std::string::npos);
-  CHECK_THROWS_AS(io::read_bvh("/nonexistent/x.bvh"), LoadError);
+  CHECK_THROWS_AS(recordings::read_bvh("/nonexistent/x.bvh"), LoadError);
 }

@@ -7,7 +7,7 @@
 #include <limits>
 
 #include "common.hpp"
-#include "sparsebody/trackers/synthesis.hpp"
+#include "sparsebody/recordings/tracker_synthesis.hpp"
 
 using namespace sparsebody;
 
@@ -17,7 +17,7 @@ TEST_CASE("T-pose calibration of an OpenXR-convention stream in a rotated stage 
   // the same motion as a headset session: trackers turned to -Z forward, the stage turned 40 deg
   // about +Y and shifted on the floor
   auto xr = frames;
-  trackers::to_openxr_convention(xr);
+  recordings::to_openxr_convention(xr);
   const Eigen::Quaterniond yaw(Eigen::AngleAxisd(40 * M_PI / 180, Eigen::Vector3d::UnitY()));
   const Eigen::Vector3d shift(1.5, 0.0, -2.0);
   for (auto& f : xr)

@@ -5,8 +5,8 @@
 #include <cmath>
 
 #include "common.hpp"
-#include "sparsebody/io/bvh.hpp"
-#include "sparsebody/trackers/synthesis.hpp"
+#include "sparsebody/recordings/bvh.hpp"
+#include "sparsebody/recordings/tracker_synthesis.hpp"
 
 using namespace sparsebody;
 using pipeline_test::golden;
@@ -57,9 +57,9 @@ TEST_CASE("tracker synthesis from a BVH equals the Python synthesis") {
     MESSAGE("skipped: " << path << " not installed (Debian package assimp-testmodels)");
     return;
   }
-  const io::BvhClip clip = io::read_bvh(path);
+  const recordings::BvhClip clip = recordings::read_bvh(path);
   const auto map = pose::JointMap::from_names(clip.skeleton, path);
-  const auto syn = trackers::synthesize_trackers(clip, map, trackers::guess_units(clip.skeleton, map));
+  const auto syn = recordings::synthesize_trackers(clip, map, recordings::guess_units(clip.skeleton, map));
   const auto& idx = g["clip_frames"];
   double worst_p = 0, worst_q = 0;
   for (std::size_t i = 0; i < idx.size(); ++i) {

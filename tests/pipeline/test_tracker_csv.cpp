@@ -3,7 +3,7 @@
 
 #include <sstream>
 
-#include "sparsebody/io/tracker_csv.hpp"
+#include "sparsebody/recordings/tracker_csv.hpp"
 
 using namespace sparsebody;
 
@@ -24,7 +24,7 @@ std::vector<trackers::TrackerFrame> sample() {
 std::string error_of(const std::string& s) {
   std::istringstream in(s);
   try {
-    io::parse_tracker_csv(in, "session.csv");
+    recordings::parse_tracker_csv(in, "session.csv");
   } catch (const LoadError& e) {
     return e.what();
   }
@@ -34,9 +34,9 @@ std::string error_of(const std::string& s) {
 
 TEST_CASE("tracker CSV round trip") {
   std::ostringstream out;
-  io::write_tracker_csv(out, sample(), "test");
+  recordings::write_tracker_csv(out, sample(), "test");
   std::istringstream in(out.str());
-  const auto back = io::parse_tracker_csv(in, "x.csv");
+  const auto back = recordings::parse_tracker_csv(in, "x.csv");
   REQUIRE(back.size() == 3);
   CHECK(back[2].time == doctest::Approx(0.0222));
   CHECK(back[1].pose[3].position.x == doctest::Approx(0.3f));
@@ -47,7 +47,7 @@ TEST_CASE("tracker CSV round trip") {
 
 TEST_CASE("tracker CSV errors name the line and the field") {
   std::ostringstream out;
-  io::write_tracker_csv(out, sample());
+  recordings::write_tracker_csv(out, sample());
   const std::string good = out.str();  // lines: 1 comment, 2 header, 3..5 rows
   auto with_row3 = [&](const std::string& row) {
     std::string s = good;
@@ -70,13 +70,13 @@ TEST_CASE("tracker CSV errors name the line and the field") {
   // times must increase
   std::string row1 = "0.5", row2 = "0.5";
   for (int i = 0; i < 32; ++i) row1 += ",1", row2 += ",1";
-  CHECK(error_of(io::tracker_csv_header() + "\n" + row1 + "\n" + row2 + "\n") ==
+  CHECK(error_of(recordings::tracker_csv_header() + "\n" + row1 + "\n" + row2 + "\n") ==
         "session.csv: line 3: field 'time': expected increasing times");
   // nan pose values are accepted by the reader (the pipeline sanitizes them)
   row = "0.5";
   for (int i = 0; i < 32; ++i) row += i == 0 ? ",nan" : ",1";
   std::string s = good + row + "\n";
   std::istringstream in(s);
-  const auto v = io::parse_tracker_csv(in, "x.csv");
+  const auto v = recordings::parse_tracker_csv(in, "x.csv");
   CHECK(std::isnan(v.back().pose[0].position.x));
 }

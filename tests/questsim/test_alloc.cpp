@@ -5,18 +5,19 @@
 
 using namespace sparsebody;
 using namespace sparsebody::control;
-using questsim_test::userFrame;
+using namespace sparsebody::avatar;
+using questsim_test::user_frame;
 
 template <class C>
-static void checkNoAlloc() {
-  C c(C::loadWeights(questsim_test::policyPath()), 1.62);
-  for (int k = 0; k < 20; ++k) c.push(userFrame(k / 72.0));  // warm up
+static void check_no_alloc() {
+  C c(C::load_weights(questsim_test::policy_path()), 1.62);
+  for (int k = 0; k < 20; ++k) c.push(user_frame(k / 72.0));  // warm up
   long long n = 0;
   int ticks = 0;
   {
     sparsebody_test::AllocationCounter counter;
     for (int k = 20; k < 20 + 4 * 72; ++k) {
-      trackers::TrackerFrame f = userFrame(k / 72.0);
+      trackers::TrackerFrame f = user_frame(k / 72.0);
       if (k % 50 == 0) f.pose[1].position.x = std::nanf("");   // bad input
       if (k > 150 && k < 230) f.valid[0] = false;               // headset lost > 0.5 s: reset
       ticks += c.push(f);
@@ -25,17 +26,17 @@ static void checkNoAlloc() {
     }
     n = counter.count();
   }
-  MESSAGE("ticks " << ticks << ", falls " << c.falls() << ", failures " << c.simulationFailures() << ", resets "
-                   << c.trackerResets());
+  MESSAGE("ticks " << ticks << ", falls " << c.falls() << ", failures " << c.simulation_failures() << ", resets "
+                   << c.tracker_resets());
   CHECK(ticks >= 140);
-  CHECK(c.simulationFailures() >= 1);
-  CHECK(c.trackerResets() >= 1);
+  CHECK(c.simulation_failures() >= 1);
+  CHECK(c.tracker_resets() >= 1);
   CHECK(n == 0);
 }
 
 TEST_CASE("QuestSim control ticks do not allocate (float and double simulation, f16 and q8 policy)") {
-  checkNoAlloc<QuestSimController<float>>();
-  checkNoAlloc<QuestSimController<double>>();
-  checkNoAlloc<QuestSimController<float, nn::f16>>();
-  checkNoAlloc<QuestSimController<float, nn::q8>>();
+  check_no_alloc<QuestSimPipeline<float>>();
+  check_no_alloc<QuestSimPipeline<double>>();
+  check_no_alloc<QuestSimPipeline<float, nn::f16>>();
+  check_no_alloc<QuestSimPipeline<float, nn::q8>>();
 }

@@ -6,16 +6,17 @@
 
 using namespace sparsebody;
 using namespace sparsebody::control;
-using questsim_test::userFrame;
-using questsim_test::stateFinite;
+using namespace sparsebody::avatar;
+using questsim_test::user_frame;
+using questsim_test::state_finite;
 
 namespace {
-using Ctl = QuestSimController<float>;
-using CtlD = QuestSimController<double>;
+using Ctl = QuestSimPipeline<float>;
+using CtlD = QuestSimPipeline<double>;
 
 template <class C>
-bool outputsFinite(const C& c) {
-  bool ok = stateFinite(c.simulator());
+bool outputs_finite(const C& c) {
+  bool ok = state_finite(c.simulator());
   for (float x : c.observation()) ok = ok && std::isfinite(x);
   for (float x : c.action()) ok = ok && std::isfinite(x) && std::abs(x) <= 1.f;
   ok = ok && c.torques().allFinite();
@@ -24,23 +25,23 @@ bool outputsFinite(const C& c) {
 }  // namespace
 
 TEST_CASE("QuestSim: avatar scaled to the user's height from the headset (lengths, masses, inertias)") {
-  trackers::TrackerFrame f = userFrame(0.0, 1.84);
+  trackers::TrackerFrame f = user_frame(0.0, 1.84);
   f.pose[0].position.y = float(0.936 * 1.84);
-  const double h = userHeightFromHeadset(f);
+  const double h = user_height_from_headset(f);
   CHECK(h == doctest::Approx(1.84).epsilon(1e-6));
   trackers::TrackerFrame bad = f;
   bad.valid[0] = false;
-  CHECK(std::isnan(userHeightFromHeadset(bad)));
+  CHECK(std::isnan(user_height_from_headset(bad)));
   bad = f;
   bad.pose[0].position.y = std::nanf("");
-  CHECK(std::isnan(userHeightFromHeadset(bad)));
+  CHECK(std::isnan(user_height_from_headset(bad)));
   bad = f;
   bad.pose[0].position.y = 0.4f;  // sitting on the floor: not a standing height
-  CHECK(std::isnan(userHeightFromHeadset(bad)));
+  CHECK(std::isnan(user_height_from_headset(bad)));
 
-  const auto ref = character::defaultAvatar<double>();  // 1.75 m
+  const auto ref = character::default_avatar<double>();  // 1.75 m
   for (double uh : {1.52, 1.84}) {
-    CtlD c(questsim_test::policyWeights<CtlD>(), uh);
+    CtlD c(questsim_test::policy_weights<CtlD>(), uh);
     const auto& m = c.simulator().model();
     const double k = uh / 1.75;
     REQUIRE(m.nb == ref.nb);
@@ -51,38 +52,38 @@ TEST_CASE("QuestSim: avatar scaled to the user's height from the headset (length
       CHECK((m.bodies[i].inertia - std::pow(k, 5) * ref.bodies[i].inertia).norm() < 1e-12);
       if (i > 0) CHECK(m.bodies[i].damping == 0.1);  // Appendix A joint friction
     }
-    CHECK(m.totalMass() == doctest::Approx(63.0 * k * k * k).epsilon(1e-9));
+    CHECK(m.total_mass() == doctest::Approx(63.0 * k * k * k).epsilon(1e-9));
     // Top of the head sphere at about the user's height in the reference pose.
     const int head = m.find("Head");
     const auto& sh = m.bodies[head].shapes[0];
     const double top = c.simulator().data().p[head].y() + sh.pos.y() + sh.radius;
     CHECK(top == doctest::Approx(uh).epsilon(0.04));
-    c.tick(userFrame(0.0, uh));
+    c.tick(user_frame(0.0, uh));
     CHECK(c.observation()[Ctl::Layout::height] == doctest::Approx(uh));
   }
-  CHECK_THROWS_AS(CtlD(questsim_test::policyWeights<CtlD>(), std::nan("")), std::invalid_argument);
+  CHECK_THROWS_AS(CtlD(questsim_test::policy_weights<CtlD>(), std::nan("")), std::invalid_argument);
   // From a standing frame directly.
-  auto made = Ctl::fromStandingFrame(questsim_test::policyWeights<Ctl>(), f);
+  auto made = Ctl::from_standing_frame(questsim_test::policy_weights<Ctl>(), f);
   REQUIRE(made != nullptr);
-  CHECK(made->userHeight() == doctest::Approx(1.84).epsilon(1e-6));
-  CHECK(made->simulator().model().totalMass() == doctest::Approx(63.0 * std::pow(1.84 / 1.75, 3)).epsilon(1e-5));
-  CHECK(Ctl::fromStandingFrame(questsim_test::policyWeights<Ctl>(), bad) == nullptr);
+  CHECK(made->user_height() == doctest::Approx(1.84).epsilon(1e-6));
+  CHECK(made->simulator().model().total_mass() == doctest::Approx(63.0 * std::pow(1.84 / 1.75, 3)).epsilon(1e-5));
+  CHECK(Ctl::from_standing_frame(questsim_test::policy_weights<Ctl>(), bad) == nullptr);
 }
 
 TEST_CASE("QuestSim: 36 Hz control, 2 substeps, and the latency of the 6 future frames") {
-  Ctl c(questsim_test::policyWeights<Ctl>(), 1.62);
+  Ctl c(questsim_test::policy_weights<Ctl>(), 1.62);
   CHECK(c.latency() == doctest::Approx(6.0 / 36.0));
-  CHECK(c.controlPeriod() == doctest::Approx(1.0 / 36.0));
+  CHECK(c.control_period() == doctest::Approx(1.0 / 36.0));
   int ticks = 0;
-  for (int k = 0; k <= 144; ++k) ticks += c.push(userFrame(k / 72.0));  // 2 s at 72 Hz
+  for (int k = 0; k <= 144; ++k) ticks += c.push(user_frame(k / 72.0));  // 2 s at 72 Hz
   CHECK(ticks == 73);                                                    // 36 Hz ticks incl. t = 0
-  CHECK(c.steps() + c.falls() + c.simulationFailures() == 73);
-  CHECK(c.newestTime() == doctest::Approx(2.0));
-  CHECK(c.trackedTime() == doctest::Approx(2.0 - 6.0 / 36.0));  // the character tracks the user 167 ms late
-  // The window's frame t is the user's pose at trackedTime(), t+6 the newest.
-  const auto fr = userFrame(c.trackedTime());
+  CHECK(c.steps() + c.falls() + c.simulation_failures() == 73);
+  CHECK(c.newest_time() == doctest::Approx(2.0));
+  CHECK(c.tracked_time() == doctest::Approx(2.0 - 6.0 / 36.0));  // the character tracks the user 167 ms late
+  // The window's frame t is the user's pose at tracked_time(), t+6 the newest.
+  const auto fr = user_frame(c.tracked_time());
   CHECK(double(c.window()[0][0].position.x()) == doctest::Approx(fr.pose[0].position.x).epsilon(1e-5));
-  const auto fn = userFrame(c.newestTime());
+  const auto fn = user_frame(c.newest_time());
   CHECK(double(c.window()[6][1].position.z()) == doctest::Approx(fn.pose[1].position.z).epsilon(1e-5));
   // Torques: 200 N m times the policy output on every non-root DoF, none on the root.
   const auto& tau = c.torques();
@@ -96,9 +97,9 @@ TEST_CASE("QuestSim: 36 Hz control, 2 substeps, and the latency of the 6 future 
 }
 
 TEST_CASE("QuestSim: NaN, lost trackers and jumps never put a NaN out") {
-  Ctl c(questsim_test::policyWeights<Ctl>(), 1.62);
+  Ctl c(questsim_test::policy_weights<Ctl>(), 1.62);
   // Nothing happens before the first valid headset frame.
-  trackers::TrackerFrame none = userFrame(0.0);
+  trackers::TrackerFrame none = user_frame(0.0);
   none.valid = {false, false, false, false};
   CHECK(c.tick(none) == QuestSimEvent::Waiting);
   CHECK_FALSE(c.started());
@@ -106,10 +107,10 @@ TEST_CASE("QuestSim: NaN, lost trackers and jumps never put a NaN out") {
   int k = 1;
   auto run = [&](int n, auto&& modify) {
     for (int i = 0; i < n; ++i, ++k) {
-      trackers::TrackerFrame f = userFrame(k * dt);
+      trackers::TrackerFrame f = user_frame(k * dt);
       modify(f, i);
       c.tick(f);
-      REQUIRE(outputsFinite(c));
+      REQUIRE(outputs_finite(c));
     }
   };
   run(20, [](trackers::TrackerFrame&, int) {});
@@ -132,70 +133,70 @@ TEST_CASE("QuestSim: NaN, lost trackers and jumps never put a NaN out") {
   CHECK(c.window()[6][0].position.x() < 1.f);
   // Headset lost for 1 s (> 0.5 s): after 0.5 s the character is held standing under the last
   // headset pose (a reset every tick); when the headset returns, tracking resumes.
-  const long long resets = c.trackerResets();
+  const long long resets = c.tracker_resets();
   run(36, [](trackers::TrackerFrame& f, int) { f.valid[0] = false; });
-  CHECK(c.lastEvent() == QuestSimEvent::TrackerReset);
-  CHECK(c.trackerResets() >= resets + 10);
+  CHECK(c.last_event() == QuestSimEvent::TrackerReset);
+  CHECK(c.tracker_resets() >= resets + 10);
   // Reset under the held headset, then one control step: within a few millimetres of it.
   CHECK(std::abs(c.simulator().q()(0) - c.window()[6][0].position.x()) < 0.01f);
   CHECK(std::abs(c.simulator().q()(2) - c.window()[6][0].position.z()) < 0.01f);
-  const long long resets_after_loss = c.trackerResets();
+  const long long resets_after_loss = c.tracker_resets();
   run(3, [](trackers::TrackerFrame&, int) {});
-  CHECK(c.trackerResets() == resets_after_loss);
-  CHECK(c.lastEvent() != QuestSimEvent::TrackerReset);
+  CHECK(c.tracker_resets() == resets_after_loss);
+  CHECK(c.last_event() != QuestSimEvent::TrackerReset);
   // The tracking origin moves by 3 m for good (recentred space): accepted after 3 ticks, then reset.
-  const long long resets2 = c.trackerResets();
+  const long long resets2 = c.tracker_resets();
   run(10, [](trackers::TrackerFrame& f, int) { f.pose[0].position.x += 3.f; f.pose[1].position.x += 3.f; f.pose[2].position.x += 3.f; });
-  CHECK(c.trackerResets() >= resets2 + 1);
+  CHECK(c.tracker_resets() >= resets2 + 1);
   CHECK(c.simulator().q()(0) > 2.f);  // the character was put back under the moved headset
   // Every device NaN for a while: held, then reset, never a NaN.
   run(40, [](trackers::TrackerFrame& f, int) { f.pose[0].position.y = std::nanf(""); f.pose[1].position.y = std::nanf(""); f.pose[2].position.y = std::nanf(""); });
   // Frames with a NaN time are dropped by push().
-  trackers::TrackerFrame nt = userFrame(k * dt);
+  trackers::TrackerFrame nt = user_frame(k * dt);
   nt.time = std::nan("");
   CHECK(c.push(nt) == 0);
-  REQUIRE(outputsFinite(c));
+  REQUIRE(outputs_finite(c));
 }
 
 TEST_CASE("QuestSim: a failing simulation step is recovered (reset to standing under the headset)") {
-  Ctl c(questsim_test::policyWeights<Ctl>(), 1.62);
-  for (int k = 0; k < 10; ++k) c.tick(userFrame(k / 36.0));
+  Ctl c(questsim_test::policy_weights<Ctl>(), 1.62);
+  for (int k = 0; k < 10; ++k) c.tick(user_frame(k / 36.0));
   // Force a failure: velocity limit below anything the character does -> VelocityLimit.
   c.simulator().velocity_limit = 1e-6f;
-  CHECK(c.tick(userFrame(10 / 36.0)) == QuestSimEvent::SimulationFailure);
-  CHECK(c.lastSimStatus() == dynamics::StepStatus::VelocityLimit);
-  CHECK(c.simulationFailures() == 1);
+  CHECK(c.tick(user_frame(10 / 36.0)) == QuestSimEvent::SimulationFailure);
+  CHECK(c.last_sim_status() == dynamics::StepStatus::VelocityLimit);
+  CHECK(c.simulation_failures() == 1);
   CHECK(c.simulator().v().cwiseAbs().maxCoeff() == 0.f);
   const auto& head = c.window()[0][0].position;  // frame t: where the character now stands
   CHECK(c.simulator().q()(0) == doctest::Approx(head.x()));
   CHECK(c.simulator().q()(2) == doctest::Approx(head.z()));
   c.simulator().velocity_limit = 500.f;
-  CHECK(c.tick(userFrame(11 / 36.0)) != QuestSimEvent::SimulationFailure);
-  REQUIRE(outputsFinite(c));
+  CHECK(c.tick(user_frame(11 / 36.0)) != QuestSimEvent::SimulationFailure);
+  REQUIRE(outputs_finite(c));
   // A corrupted state (NaN written into the simulator from outside): the observation is rejected
   // (zero torques), the step refuses the input, and the character is reset.
   auto q = c.simulator().q();
   q(10) = std::nanf("");
-  c.simulator().setState(q, c.simulator().v());
-  CHECK(c.tick(userFrame(12 / 36.0)) == QuestSimEvent::SimulationFailure);
-  CHECK(c.lastSimStatus() == dynamics::StepStatus::NonFiniteInput);
-  CHECK(c.rejectedActions() == 1);
-  REQUIRE(outputsFinite(c));
-  CHECK(c.tick(userFrame(13 / 36.0)) != QuestSimEvent::SimulationFailure);
+  c.simulator().set_state(q, c.simulator().v());
+  CHECK(c.tick(user_frame(12 / 36.0)) == QuestSimEvent::SimulationFailure);
+  CHECK(c.last_sim_status() == dynamics::StepStatus::NonFiniteInput);
+  CHECK(c.rejected_actions() == 1);
+  REQUIRE(outputs_finite(c));
+  CHECK(c.tick(user_frame(13 / 36.0)) != QuestSimEvent::SimulationFailure);
 }
 
 TEST_CASE("QuestSim: a fall is detected and the character stands up again") {
-  Ctl c(questsim_test::policyWeights<Ctl>(), 1.62);
-  for (int k = 0; k < 5; ++k) c.tick(userFrame(k / 36.0));
+  Ctl c(questsim_test::policy_weights<Ctl>(), 1.62);
+  for (int k = 0; k < 5; ++k) c.tick(user_frame(k / 36.0));
   CHECK_FALSE(c.fallen());
   // Lay the character on the floor: root low and tilted 90 degrees.
   auto q = c.simulator().q();
   q(1) = 0.15f;
   const Eigen::Quaternionf lying(Eigen::AngleAxisf(1.5708f, Eigen::Vector3f::UnitX()));
   q(3) = lying.w(); q(4) = lying.x(); q(5) = lying.y(); q(6) = lying.z();
-  c.simulator().setState(q, c.simulator().v());
+  c.simulator().set_state(q, c.simulator().v());
   CHECK(c.fallen());
-  CHECK(c.tick(userFrame(5 / 36.0)) == QuestSimEvent::Fall);
+  CHECK(c.tick(user_frame(5 / 36.0)) == QuestSimEvent::Fall);
   CHECK(c.falls() == 1);
   CHECK_FALSE(c.fallen());
   CHECK(c.simulator().data().p[0].y() > 0.8f);
@@ -210,15 +211,15 @@ TEST_CASE("QuestSim: 20 s of random-weight control on a moving user, float and d
   // Random weights do not balance: the run exercises falls and their recovery for a long time.
   auto run = [](auto& c) {
     for (int k = 0; k <= 20 * 72; ++k) {
-      c.push(userFrame(k / 72.0));
-      REQUIRE(outputsFinite(c));
+      c.push(user_frame(k / 72.0));
+      REQUIRE(outputs_finite(c));
       REQUIRE(c.simulator().data().p[0].y() > -0.05);
     }
-    MESSAGE("steps " << c.steps() << ", falls " << c.falls() << ", simulation failures " << c.simulationFailures());
-    CHECK(c.steps() + c.falls() + c.simulationFailures() == 20 * 36 + 1);
+    MESSAGE("steps " << c.steps() << ", falls " << c.falls() << ", simulation failures " << c.simulation_failures());
+    CHECK(c.steps() + c.falls() + c.simulation_failures() == 20 * 36 + 1);
   };
-  Ctl cf(questsim_test::policyWeights<Ctl>(), 1.62);
+  Ctl cf(questsim_test::policy_weights<Ctl>(), 1.62);
   run(cf);
-  CtlD cd(questsim_test::policyWeights<CtlD>(), 1.62);
+  CtlD cd(questsim_test::policy_weights<CtlD>(), 1.62);
   run(cd);
 }

@@ -13,24 +13,24 @@ TEST_CASE("QuestSim layout: sizes follow the model, paper numbers reproduced") {
   using Paper = QuestSimLayout<16, 33, 5>;
   CHECK(Paper::sim_size == 312);
   CHECK(Paper::size - Paper::sim_size - 1 == 162);
-  CHECK(questSimObservationSize(16, 33, 5) == 475);
+  CHECK(quest_sim_observation_size(16, 33, 5) == 475);
   // Default avatar, current + 6 future frames.
-  using Av = QuestSimLayout<kDefaultAvatarBodies, kDefaultAvatarJointDofs, 6>;
+  using Av = QuestSimLayout<character::kDefaultAvatarBodies, character::kDefaultAvatarJointDofs, 6>;
   static_assert(Av::size == 607, "default avatar observation size");
   CHECK(Av::x == 96);
   CHECK(Av::f == 96 + 15 * 21);
   CHECK(Av::height == Av::size - 1);
-  const auto m = character::defaultAvatar<double>();
-  CHECK(m.nb == kDefaultAvatarBodies);
-  CHECK(m.nv - 6 == kDefaultAvatarJointDofs);
+  const auto m = character::default_avatar<double>();
+  CHECK(m.nb == character::kDefaultAvatarBodies);
+  CHECK(m.nv - 6 == character::kDefaultAvatarJointDofs);
   QuestSimObservationBuilder<double, 24, 72> ok(m);
-  CHECK(ok.footOfBody(m.find("Toes_R")) == 1);
-  CHECK(ok.footOfBody(m.find("Foot_L")) == 0);
-  CHECK(ok.footOfBody(m.find("Hand_L")) == -1);
+  CHECK(ok.foot_of_body(m.find("Toes_R")) == 1);
+  CHECK(ok.foot_of_body(m.find("Foot_L")) == 0);
+  CHECK(ok.foot_of_body(m.find("Hand_L")) == -1);
   // A model of another shape is refused at construction (the layout would not fit).
   character::AvatarOptions o;
   o.hinge_knees_elbows = false;  // spherical knees/elbows: nv 62
-  const auto m62 = character::defaultAvatar<double>(o);
+  const auto m62 = character::default_avatar<double>(o);
   CHECK_THROWS_AS((QuestSimObservationBuilder<double, 24, 72>(m62)), std::invalid_argument);
   CHECK_NOTHROW((QuestSimObservationBuilder<double, 24, 72, 21, 56>(m62)));
 }
@@ -38,7 +38,7 @@ TEST_CASE("QuestSim layout: sizes follow the model, paper numbers reproduced") {
 namespace {
 using Model = dynamics::Model<double, 24, 72>;
 using Window = std::array<QuestSimSensorFrame<double>, 7>;
-constexpr int NB = kDefaultAvatarBodies, NJ = kDefaultAvatarJointDofs;
+constexpr int NB = character::kDefaultAvatarBodies, NJ = character::kDefaultAvatarJointDofs;
 using L = QuestSimLayout<NB, NJ, 6>;
 
 struct State {
@@ -48,16 +48,16 @@ struct State {
   Window user;
 };
 
-State randomState(const Model& m, std::mt19937& rng) {
+State random_state(const Model& m, std::mt19937& rng) {
   std::normal_distribution<double> n;
   State s;
-  s.q = m.neutralConfiguration();
+  s.q = m.neutral_configuration();
   s.v = Model::VecV::Zero(m.nv);
   for (int i = 0; i < m.nb; ++i) {
     const auto& b = m.bodies[i];
     if (b.joint == dynamics::JointType::Spherical || b.joint == dynamics::JointType::Free) {
       const int k = b.q_index + (b.joint == dynamics::JointType::Free ? 3 : 0);
-      const auto r = dynamics::quatExp(Vec3<double>(0.4 * n(rng), 0.4 * n(rng), 0.4 * n(rng)));
+      const auto r = dynamics::quat_exp(Vec3<double>(0.4 * n(rng), 0.4 * n(rng), 0.4 * n(rng)));
       s.q(k) = r.w(); s.q(k + 1) = r.x(); s.q(k + 2) = r.y(); s.q(k + 3) = r.z();
     } else if (b.joint == dynamics::JointType::Revolute) {
       s.q(b.q_index) = 0.5 * n(rng);
@@ -69,25 +69,25 @@ State randomState(const Model& m, std::mt19937& rng) {
   for (auto& fr : s.user)
     for (auto& d : fr) {
       d.position = Vec3<double>(n(rng), 1 + 0.3 * n(rng), n(rng));
-      d.rotation = dynamics::quatExp(Vec3<double>(n(rng), n(rng), n(rng))).toRotationMatrix();
+      d.rotation = dynamics::quat_exp(Vec3<double>(n(rng), n(rng), n(rng))).toRotationMatrix();
     }
   return s;
 }
 
 std::array<double, L::size> observe(const Model& m, const State& s, double height) {
   dynamics::Data<double, 24, 72> d(m);
-  dynamics::forwardKinematics(m, d, s.q, &s.v);
+  dynamics::forward_kinematics(m, d, s.q, &s.v);
   std::array<double, L::size> o{};
-  buildQuestSimObservation<NB, NJ, 6>(m, d, s.q, s.v, s.f, s.user, height, o.data());
+  build_quest_sim_observation<NB, NJ, 6>(m, d, s.q, s.v, s.f, s.user, height, o.data());
   return o;
 }
 }  // namespace
 
 TEST_CASE("QuestSim observation: invariant to a yaw rotation and horizontal shift of the whole scene (frame S)") {
-  const Model m = character::defaultAvatar<double>();
+  const Model m = character::default_avatar<double>();
   std::mt19937 rng(3);
   for (int trial = 0; trial < 20; ++trial) {
-    const State a = randomState(m, rng);
+    const State a = random_state(m, rng);
     const auto oa = observe(m, a, 1.7);
     // Move everything: world' = Ry(psi) world + (tx, 0, tz).
     const double psi = 2.0 * trial - 17.0;
@@ -120,9 +120,9 @@ TEST_CASE("QuestSim observation: invariant to a yaw rotation and horizontal shif
 }
 
 TEST_CASE("QuestSim observation: joint block holds rotation vectors, velocity block holds v without the root") {
-  const Model m = character::defaultAvatar<double>();
+  const Model m = character::default_avatar<double>();
   std::mt19937 rng(5);
-  const State s = randomState(m, rng);
+  const State s = random_state(m, rng);
   const auto o = observe(m, s, 1.6);
   const int ua = m.find("UpperArm_L"), knee = m.find("LowerLeg_R");
   const auto& b = m.bodies[ua];

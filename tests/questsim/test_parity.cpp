@@ -13,10 +13,11 @@
 
 using namespace sparsebody;
 using namespace sparsebody::control;
+using namespace sparsebody::avatar;
 using dynamics::Vec3;
 
 namespace {
-constexpr int NB = kDefaultAvatarBodies, NJ = kDefaultAvatarJointDofs, NF = 6;
+constexpr int NB = character::kDefaultAvatarBodies, NJ = character::kDefaultAvatarJointDofs, NF = 6;
 using L = QuestSimLayout<NB, NJ, NF>;
 using Model = dynamics::Model<double, 24, 72>;
 using Sim = dynamics::Simulator<double, 24, 72>;
@@ -40,7 +41,7 @@ nlohmann::json vec(const Eigen::Ref<const Eigen::VectorXd>& v) {
 
 TEST_CASE("QuestSim parity: observation and policy against PyTorch (weights_tool/questsim)") {
   const double height = 1.62;
-  Model m = character::avatarForUserHeight<double>(height);
+  Model m = character::avatar_for_user_height<double>(height);
   for (int i = 1; i < m.nb; ++i) m.bodies[i].damping = 0.1;
   m.finalize();
   Sim sim(m);
@@ -51,7 +52,7 @@ TEST_CASE("QuestSim parity: observation and policy against PyTorch (weights_tool
   std::uniform_real_distribution<double> u(-1, 1);
 
   nlohmann::json cj;
-  cj["model"] = nlohmann::json::parse(dynamics::modelToJson(m));
+  cj["model"] = nlohmann::json::parse(dynamics::model_to_json(m));
   cj["future"] = NF;
   cj["states"] = nlohmann::json::array();
   std::vector<Case> cases;
@@ -61,7 +62,7 @@ TEST_CASE("QuestSim parity: observation and policy against PyTorch (weights_tool
   q(1) += 0.01;
   for (int k = 0; k < m.nv; ++k) v(k) = 0.3 * n(rng);
   q(3) = std::cos(0.35); q(5) = std::sin(0.35);  // yawed root
-  sim.setState(q, v);
+  sim.set_state(q, v);
   int with_contacts = 0;
   for (int c = 0; c < 8; ++c) {
     for (int s = 0; s < 7; ++s) {
@@ -74,18 +75,18 @@ TEST_CASE("QuestSim parity: observation and policy against PyTorch (weights_tool
       nlohmann::json fj = nlohmann::json::array();
       for (auto& d : fr) {
         d.position = Vec3<double>(0.3 * n(rng), 1.5 + 0.1 * n(rng), 0.3 * n(rng));
-        const Eigen::Quaterniond r = dynamics::quatExp(Vec3<double>(n(rng), n(rng), n(rng)));
+        const Eigen::Quaterniond r = dynamics::quat_exp(Vec3<double>(n(rng), n(rng), n(rng)));
         d.rotation = r.toRotationMatrix();
         fj.push_back({d.position.x(), d.position.y(), d.position.z(), r.w(), r.x(), r.y(), r.z()});
       }
       uj.push_back(fj);
     }
     nlohmann::json contacts = nlohmann::json::array();
-    for (int k = 0; k < sim.numContacts(); ++k) {
-      const auto& ct = sim.contactAt(k);
+    for (int k = 0; k < sim.num_contacts(); ++k) {
+      const auto& ct = sim.contact_at(k);
       if (ct.active) contacts.push_back({ct.body, ct.force.x(), ct.force.y(), ct.force.z()});
     }
-    const auto ff = builder.footForces(sim);
+    const auto ff = builder.foot_forces(sim);
     with_contacts += (ff[0].norm() + ff[1].norm()) > 1.0;
     cj["states"].push_back({{"q", vec(sim.q())}, {"v", vec(sim.v())}, {"contacts", contacts}, {"user", uj}, {"height", height}});
     Case cs;
@@ -96,7 +97,7 @@ TEST_CASE("QuestSim parity: observation and policy against PyTorch (weights_tool
       dynamics::Data<float, 24, 72> df(mf);
       const dynamics::Model<float, 24, 72>::VecQ qf = sim.q().cast<float>();
       const dynamics::Model<float, 24, 72>::VecV vf = sim.v().cast<float>();
-      dynamics::forwardKinematics(mf, df, qf, &vf);
+      dynamics::forward_kinematics(mf, df, qf, &vf);
       std::array<QuestSimSensorFrame<float>, NF + 1> uf;
       for (int t = 0; t <= NF; ++t)
         for (int d = 0; d < 3; ++d) {
@@ -104,7 +105,7 @@ TEST_CASE("QuestSim parity: observation and policy against PyTorch (weights_tool
           uf[t][d].rotation = user[t][d].rotation.cast<float>();
         }
       const std::array<Vec3<float>, 2> fff{ff[0].cast<float>(), ff[1].cast<float>()};
-      buildQuestSimObservation<NB, NJ, NF>(mf, df, qf, vf, fff, uf, float(height), cs.obs_float_sim.data());
+      build_quest_sim_observation<NB, NJ, NF>(mf, df, qf, vf, fff, uf, float(height), cs.obs_float_sim.data());
     }
     cases.push_back(cs);
   }
@@ -115,7 +116,7 @@ TEST_CASE("QuestSim parity: observation and policy against PyTorch (weights_tool
   std::ofstream(case_path) << cj.dump();
   const std::string cmd = std::string("cd \"") + SPARSEBODY_SOURCE_DIR + "\" && \"" + SPARSEBODY_PYTHON_EXE +
                           "\" -m weights_tool.questsim reference --case \"" + case_path + "\" --weights \"" +
-                          questsim_test::policyPath() + "\" --out \"" + ref_path + "\"";
+                          questsim_test::policy_path() + "\" --out \"" + ref_path + "\"";
   REQUIRE(std::system(cmd.c_str()) == 0);
   nlohmann::json ref;
   std::ifstream(ref_path) >> ref;
@@ -130,8 +131,8 @@ TEST_CASE("QuestSim parity: observation and policy against PyTorch (weights_tool
   std::ifstream(ref_full_path) >> ref_full;
   REQUIRE(ref["observations"].size() == cases.size());
 
-  auto wf = nn::NetworkWeights<NetF>::load(questsim_test::policyPath(), networks::kQuestSimPolicyKind);
-  auto wh = nn::NetworkWeights<NetH>::load(questsim_test::policyPath(), networks::kQuestSimPolicyKind);
+  auto wf = nn::NetworkWeights<NetF>::load(questsim_test::policy_path(), networks::kQuestSimPolicyKind);
+  auto wh = nn::NetworkWeights<NetH>::load(questsim_test::policy_path(), networks::kQuestSimPolicyKind);
   auto wfull = nn::NetworkWeights<NetF>::load(policy_full, networks::kQuestSimPolicyKind);
   nn::Network<NetF> pf(wf), pfull(wfull);
   nn::Network<NetH> ph(wh);

@@ -27,6 +27,7 @@
 #include "sparsebody/pose/ik.hpp"
 #include "sparsebody/pose/joint_map.hpp"
 #include "sparsebody/pose/rotation6d.hpp"
+#include "sparsebody/predict/lobstr_meta.hpp"
 #include "sparsebody/trackers/resampler.hpp"
 #include "sparsebody/trackers/sanitizer.hpp"
 
@@ -44,38 +45,6 @@ struct LoBSTrConfig {
   trackers::SanitizerConfig sanitizer{};
 };
 
-// What the weights file's meta says about the pipeline (see weights_tool/lobstr/export.py).
-struct LoBSTrMeta {
-  pose::Skeleton skeleton;      // standard skeleton, metres
-  int lower[8] = {};            // joint indices of the 8 predicted joints
-  double frame_rate = 30;
-  double standing_hips_height = 0.9, standing_head_height = 1.38;
-  double toe_height = 0.042;    // standing height of the toe-base joint above the floor
-
-  static LoBSTrMeta from(const io::ModelInfo& info) {
-    const std::string& src = info.source;
-    LoBSTrMeta m;
-    const auto& j = info.meta;
-    if (!j.contains("skeleton")) throw LoadError(src, "meta.skeleton: missing (not a LoBSTr pipeline file)");
-    m.skeleton = pose::Skeleton::from_json(j["skeleton"], src);
-    if (!j.contains("lower_body_joints") || !j["lower_body_joints"].is_array() || j["lower_body_joints"].size() != 8)
-      throw LoadError(src, "meta.lower_body_joints: expected 8 joint names");
-    for (int i = 0; i < 8; ++i) {
-      const auto& n = j["lower_body_joints"][i];
-      m.lower[i] = n.is_string() ? m.skeleton.find(n.get<std::string>()) : -1;
-      if (m.lower[i] < 0) throw LoadError(src, "meta.lower_body_joints[" + std::to_string(i) + "]: not a skeleton joint");
-    }
-    if (info.frame_rate > 0) m.frame_rate = info.frame_rate;
-    if (info.rotation_representation != "6d" || info.rotation_layout != "columns" ||
-        j["rotation"].value("columns", nlohmann::json::array()) != nlohmann::json::array({2, 1}))
-      throw LoadError(src, "meta.rotation: expected {\"representation\": \"6d\", \"layout\": \"columns\", \"columns\": [2, 1]}");
-    m.standing_hips_height = j.value("standing_hips_height", m.standing_hips_height);
-    m.standing_head_height = j.value("standing_head_height", m.standing_head_height);
-    m.toe_height = j.value("toe_height", m.toe_height);
-    return m;
-  }
-};
-
 // W: the network's stored weight type: T, nn::f16 (half the bytes) or nn::q8 (int8, a quarter;
 // see nn/int8.hpp and the README for what each costs in accuracy).
 template <typename T = float, int Hidden = 256, int Latent = 128, typename W = T>
@@ -88,7 +57,7 @@ class LoBSTrPipeline {
   static std::shared_ptr<const Weights> load(const std::string& path) { return Weights::load(path, networks::kLoBSTrKind); }
 
   explicit LoBSTrPipeline(std::shared_ptr<const Weights> w, LoBSTrConfig cfg = {})
-      : cfg_(cfg), meta_(LoBSTrMeta::from(w->info())), net_(w), sanitizer_(cfg.sanitizer),
+      : cfg_(cfg), meta_(predict::LoBSTrMeta::from(w->info())), net_(w), sanitizer_(cfg.sanitizer),
         resampler_(meta_.frame_rate) {
     const pose::Skeleton& s = meta_.skeleton;
     map_ = pose::JointMap::from_names(s, w->info().source);
@@ -152,7 +121,7 @@ class LoBSTrPipeline {
   double user_scale() const noexcept { return 1.0 / calib_.scale; }
   const pose::Skeleton& skeleton() const noexcept { return meta_.skeleton; }
   const pose::JointMap& joint_map() const noexcept { return map_; }
-  const LoBSTrMeta& meta() const noexcept { return meta_; }
+  const predict::LoBSTrMeta& meta() const noexcept { return meta_; }
   const T* features() const noexcept { return x_; }
   const T* network_output() const noexcept { return y_; }  // [48 pose 6D | 2 left | 2 right]
   double contact_probability(int foot) const noexcept { return y_[48 + 2 * foot + 1]; }
@@ -310,7 +279,7 @@ class LoBSTrPipeline {
   }
 
   LoBSTrConfig cfg_;
-  LoBSTrMeta meta_;
+  predict::LoBSTrMeta meta_;
   nn::Network<Net> net_;
   trackers::TrackerSanitizer sanitizer_;
   trackers::Resampler resampler_;

@@ -33,7 +33,7 @@
 #include <cmath>
 #include <string>
 
-#include "sparsebody/avatar/n3p_predictor.hpp"
+#include "sparsebody/predict/n3p_predictor.hpp"
 #include "sparsebody/features/n3p_calibration.hpp"
 #include "sparsebody/pose/body_pose.hpp"
 #include "sparsebody/pose/ik.hpp"
@@ -106,7 +106,7 @@ class FootPin {
 template <typename T = float, int HSig = 64, int HLo = 128, int HUp = 128, typename W = T>
 class N3PPipeline {
  public:
-  using Predictor = N3PPredictor<T, HSig, HLo, HUp, W>;
+  using Predictor = predict::N3PPredictor<T, HSig, HLo, HUp, W>;
   using Weights = typename Predictor::Weights;
 
   // prefix ("…/n3p") or any of the three files; throws LoadError.
@@ -203,7 +203,7 @@ class N3PPipeline {
   double user_scale() const noexcept { return 1.0 / calib_.base.scale; }
   const pose::Skeleton& skeleton() const noexcept { return pred_.skeleton(); }
   const pose::JointMap& joint_map() const noexcept { return map_; }
-  const N3PMeta& meta() const noexcept { return pred_.meta(); }
+  const predict::N3PMeta& meta() const noexcept { return pred_.meta(); }
   const Predictor& predictor() const noexcept { return pred_; }
   double contact_probability(int foot) const noexcept { return pred_.contact(foot); }
   bool contact(int foot) const noexcept { return contact_probability(foot) > cfg_.contact_threshold; }

@@ -128,7 +128,7 @@ class N3PPhysicsPipeline {
   N3PPhysicsPipeline(const Weights& w, std::shared_ptr<const PolicyWeights> policy, N3PPhysicsConfig cfg = {})
       : cfg_(cfg),
         direct_(w, cfg.direct),
-        model_(character::defaultAvatar<S, MB, MD>(cfg.avatar)),
+        model_(character::default_avatar<S, MB, MD>(cfg.avatar)),
         sim_(model_),
         retarget_(control::N3PSimRetarget<S, MB, MD>::from_meta(model_, direct_.meta())),
         controller_(model_, cfg.controller),
@@ -137,8 +137,8 @@ class N3PPhysicsPipeline {
         resampler_(direct_.meta().frame_rate) {
     if (policy) control_ = std::make_unique<ControlPredictor>(w, std::move(policy));
     sim_.contact.max_passes = cfg.contact_passes;
-    for (auto& q : ref_) q = model_.neutralConfiguration();
-    q_tmp_ = model_.neutralConfiguration();
+    for (auto& q : ref_) q = model_.neutral_configuration();
+    q_tmp_ = model_.neutral_configuration();
     q_place_ = q_tmp_;
     v_tmp_.setZero(model_.nv);
     tau_.setZero(model_.nv);
@@ -228,13 +228,13 @@ class N3PPhysicsPipeline {
   bool contact(int foot) const noexcept {
     const int f = retarget_.body_of(direct_.joint_map()[foot ? pose::Role::FootR : pose::Role::FootL]);
     const int t = retarget_.body_of(direct_.joint_map()[foot ? pose::Role::ToeR : pose::Role::ToeL]);
-    for (int k = 0; k < sim_.numContacts(); ++k) {
-      const auto& c = sim_.contactAt(k);
+    for (int k = 0; k < sim_.num_contacts(); ++k) {
+      const auto& c = sim_.contact_at(k);
       if (c.active && (c.body == f || c.body == t)) return true;
     }
     return false;
   }
-  const N3PMeta& meta() const noexcept { return direct_.meta(); }
+  const predict::N3PMeta& meta() const noexcept { return direct_.meta(); }
   double user_scale() const noexcept { return direct_.user_scale(); }
   const N3PPhysicsConfig& config() const noexcept { return cfg_; }
 
@@ -244,7 +244,7 @@ class N3PPhysicsPipeline {
     const auto& d = sim_.data();
     for (int k = 0; k < model_.num_points; ++k) {
       const auto& c = model_.points[k];
-      lo = std::min(lo, double(dynamics::pointPosition(d, c.body, c.pos).y() - c.radius));
+      lo = std::min(lo, double(dynamics::point_position(d, c.body, c.pos).y() - c.radius));
     }
     return -lo;
   }
@@ -287,7 +287,7 @@ class N3PPhysicsPipeline {
   void place(const VecQ& q, const VecV& v) noexcept {
     q_place_ = q;
     if (cfg_.ground_resets) q_place_(model_.bodies[retarget_.body_of(0)].q_index + 1) += controller_.ground_lift(model_, q_place_);
-    sim_.setState(q_place_, v);
+    sim_.set_state(q_place_, v);
   }
 
   // Puts the character on the reference of frame n with the reference velocity.
@@ -309,7 +309,7 @@ class N3PPhysicsPipeline {
       for (int s = 0; s < 2; ++s) support[s] = contact(s) ? support[s] : 0.0;
     controller_.set_reference(model_, ref_at(F - 2), ref_at(F - 1), ref_at(F), dt, support);
     if (cfg_.per_frame_targets && !control_) sim_.targets() = ref_at(F + cfg_.target_lead);
-    if (!control_ && cfg_.velocity_targets) sim_.targetVelocities() = controller_.reference_velocity();
+    if (!control_ && cfg_.velocity_targets) sim_.target_velocities() = controller_.reference_velocity();
     out_time_ = hd.time;
     const bool policy = control_ != nullptr;
     for (int k = 0; k < cfg_.substeps; ++k) {

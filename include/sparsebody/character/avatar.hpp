@@ -14,10 +14,16 @@
 #pragma once
 #include <string>
 
-#include "../dynamics/model.hpp"
-#include "de_leva.hpp"
+#include "sparsebody/dynamics/model.hpp"
+#include "sparsebody/character/de_leva.hpp"
 
 namespace sparsebody::character {
+
+// Size of the default avatar (default_avatar below): 21 bodies; nv = 54, i.e. 48 DoFs besides the
+// free root (hinge knees, elbows and toes, spherical joints elsewhere). Fixed-size users (the
+// QuestSim observation) take these as template arguments; test_avatar checks them.
+inline constexpr int kDefaultAvatarBodies = 21;
+inline constexpr int kDefaultAvatarJointDofs = 48;
 
 struct AvatarOptions {
   double height = 1.75;           // m (Neural3Points: 1.75 m, 63 kg)
@@ -29,7 +35,7 @@ struct AvatarOptions {
 };
 
 template <class S, int MB = 24, int MD = 72>
-inline dynamics::Model<S, MB, MD> defaultAvatar(const AvatarOptions& o = AvatarOptions{}) {
+inline dynamics::Model<S, MB, MD> default_avatar(const AvatarOptions& o = AvatarOptions{}) {
   using namespace dynamics;
   using V = Vec3<S>;
   namespace dl = de_leva;
@@ -87,14 +93,14 @@ inline dynamics::Model<S, MB, MD> defaultAvatar(const AvatarOptions& o = AvatarO
                      dl::kLowerTrunk.mass_fraction * M, V(0, S(1 - dl::kLowerTrunk.com) * l, 0),
                      inertia(dl::kLowerTrunk.mass_fraction * M, dl::kLowerTrunk, 1, l));
     capsule(b, V(-S(0.07 * s), S(0.35) * l, 0), V(S(0.07 * s), S(0.35) * l, 0), S(0.09 * s));
-    m.addBody("Hips", b);
+    m.add_body("Hips", b);
   }
   {  // Spine = middle trunk (xiphoid..omphalion), origin at omphalion
     const S l = L(dl::kMiddleTrunk);
     Body<S> b = body(0, JointType::Spherical, V(0, L(dl::kLowerTrunk), 0), dl::kMiddleTrunk.mass_fraction * M,
                      V(0, S(1 - dl::kMiddleTrunk.com) * l, 0), inertia(dl::kMiddleTrunk.mass_fraction * M, dl::kMiddleTrunk, 1, l));
     sphere(b, V(0, S(0.5) * l, 0), S(0.1 * s));
-    m.addBody("Spine", b);
+    m.add_body("Spine", b);
   }
   const double chest_mass = dl::kUpperTrunk.mass_fraction * M * 0.8;
   {  // Chest = upper trunk minus the two shoulders, origin at xiphoid
@@ -102,7 +108,7 @@ inline dynamics::Model<S, MB, MD> defaultAvatar(const AvatarOptions& o = AvatarO
     Body<S> b = body(1, JointType::Spherical, V(0, L(dl::kMiddleTrunk), 0), chest_mass,
                      V(0, S(1 - dl::kUpperTrunk.com) * l, 0), inertia(chest_mass, dl::kUpperTrunk, 1, l));
     capsule(b, V(-S(0.08 * s), S(0.5) * l, 0), V(S(0.08 * s), S(0.5) * l, 0), S(0.1 * s));
-    m.addBody("Chest", b);
+    m.add_body("Chest", b);
   }
   const double head_seg = dl::kHead.mass_fraction * M;
   const S l_head = L(dl::kHead), l_neck = S(0.35) * l_head;
@@ -110,7 +116,7 @@ inline dynamics::Model<S, MB, MD> defaultAvatar(const AvatarOptions& o = AvatarO
     const double mass = 0.15 * head_seg;
     Body<S> b = body(2, JointType::Spherical, V(0, L(dl::kUpperTrunk), 0), mass, V(0, S(0.5) * l_neck, 0),
                      inertia(mass, dl::Segment{0, 0, 0, 0.3, 0.3, 0.3}, 1, double(l_neck)));
-    m.addBody("Neck", b);
+    m.add_body("Neck", b);
   }
   {  // Head: CoM from de Leva (59.76 % from the vertex) re-expressed from the head joint
     const double mass = 0.85 * head_seg;
@@ -118,7 +124,7 @@ inline dynamics::Model<S, MB, MD> defaultAvatar(const AvatarOptions& o = AvatarO
     Body<S> b = body(3, JointType::Spherical, V(0, l_neck, 0), mass, V(0, std::max(com_y, S(0.3) * (l_head - l_neck)), 0),
                      inertia(mass, dl::kHead, 1, double(l_head)));
     sphere(b, V(0, S(0.45) * (l_head - l_neck), S(0.01 * s)), S(0.1 * s));
-    m.addBody("Head", b);
+    m.add_body("Head", b);
   }
   for (int side = 0; side < 2; ++side) {  // arms: L = +x
     const S sx = side == 0 ? S(1) : S(-1);
@@ -128,22 +134,22 @@ inline dynamics::Model<S, MB, MD> defaultAvatar(const AvatarOptions& o = AvatarO
     Body<S> sh = body(chest, JointType::Spherical, V(sx * sh_x, L(dl::kUpperTrunk) - sh_drop, 0), sh_mass,
                       V(sx * S(0.5) * (arm_x - sh_x), 0, 0),
                       inertia(sh_mass, dl::Segment{0, 0, 0, 0.3, 0.3, 0.15}, 0, double(arm_x - sh_x)));
-    const int ish = m.addBody("Shoulder" + suf, sh);
+    const int ish = m.add_body("Shoulder" + suf, sh);
     const S lu = L(dl::kUpperArm), lf = L(dl::kForearm), lh = L(dl::kHand);
     const double mu = dl::kUpperArm.mass_fraction * M, mf = dl::kForearm.mass_fraction * M, mh = dl::kHand.mass_fraction * M;
     Body<S> ua = body(ish, JointType::Spherical, V(sx * (arm_x - sh_x), 0, 0), mu, V(sx * S(dl::kUpperArm.com) * lu, 0, 0),
                       inertia(mu, dl::kUpperArm, 0, double(lu)));
     capsule(ua, V(sx * S(0.1) * lu, 0, 0), V(sx * S(0.9) * lu, 0, 0), S(0.045 * s));
-    const int iua = m.addBody("UpperArm" + suf, ua);
+    const int iua = m.add_body("UpperArm" + suf, ua);
     Body<S> la = body(iua, elbow_knee, V(sx * lu, 0, 0), mf, V(sx * S(dl::kForearm.com) * lf, 0, 0),
                       inertia(mf, dl::kForearm, 0, double(lf)));
     la.axis = V::UnitY();
     capsule(la, V(sx * S(0.1) * lf, 0, 0), V(sx * S(0.9) * lf, 0, 0), S(0.04 * s));
-    const int ila = m.addBody("LowerArm" + suf, la);
+    const int ila = m.add_body("LowerArm" + suf, la);
     Body<S> hd = body(ila, JointType::Spherical, V(sx * lf, 0, 0), mh, V(sx * S(dl::kHand.com) * lh, 0, 0),
                       inertia(mh, dl::kHand, 0, double(lh)));
     capsule(hd, V(sx * S(0.3) * lh, 0, 0), V(sx * S(1.2) * lh, 0, 0), S(0.035 * s));
-    m.addBody("Hand" + suf, hd);
+    m.add_body("Hand" + suf, hd);
   }
   const S lfoot = L(dl::kFoot);
   const S heel_z = S(-0.22) * lfoot, mtp_z = S(0.51) * lfoot, toe_z = S(0.78) * lfoot;
@@ -156,22 +162,22 @@ inline dynamics::Model<S, MB, MD> defaultAvatar(const AvatarOptions& o = AvatarO
     Body<S> th = body(0, JointType::Spherical, V(sx * hip_x, 0, 0), mt, V(0, -S(dl::kThigh.com) * l_thigh, 0),
                       inertia(mt, dl::kThigh, 1, double(l_thigh)));
     capsule(th, V(0, S(-0.15) * l_thigh, 0), V(0, S(-0.9) * l_thigh, 0), S(0.065 * s));
-    const int ith = m.addBody("UpperLeg" + suf, th);
+    const int ith = m.add_body("UpperLeg" + suf, th);
     Body<S> sk = body(ith, elbow_knee, V(0, -l_thigh, 0), ms, V(0, -S(dl::kShank.com) * l_shank, 0),
                       inertia(ms, dl::kShank, 1, double(l_shank)));
     sk.axis = V::UnitX();
     capsule(sk, V(0, S(-0.1) * l_shank, 0), V(0, S(-0.85) * l_shank, 0), S(0.05 * s));
-    const int isk = m.addBody("LowerLeg" + suf, sk);
+    const int isk = m.add_body("LowerLeg" + suf, sk);
     // Foot: heel..metatarsophalangeal joint, sole at the floor in the reference pose.
     Body<S> ft = body(isk, JointType::Spherical, V(0, -l_shank, 0), mfoot,
                       V(0, S(-0.6) * ankle_h, heel_z + S(0.4) * lfoot), inertia(mfoot, dl::kFoot, 2, double(lfoot)));
     box(ft, V(0, S(-0.5) * ankle_h, S(0.5) * (heel_z + mtp_z)), V(foot_hw, S(0.5) * ankle_h, S(0.5) * (mtp_z - heel_z)));
-    const int ift = m.addBody("Foot" + suf, ft);
+    const int ift = m.add_body("Foot" + suf, ft);
     Body<S> to = body(ift, JointType::Revolute, V(0, -ankle_h + toe_h, mtp_z), mtoe, V(0, S(-0.5) * toe_h, S(0.5) * (toe_z - mtp_z)),
                       inertia(mtoe, dl::Segment{0, 0, 0, 0.3, 0.3, 0.2}, 2, double(toe_z - mtp_z)));
     to.axis = V::UnitX();
     box(to, V(0, S(-0.5) * toe_h, S(0.5) * (toe_z - mtp_z)), V(foot_hw, S(0.5) * toe_h, S(0.5) * (toe_z - mtp_z)));
-    m.addBody("Toes" + suf, to);
+    m.add_body("Toes" + suf, to);
   }
   return m;
 }
@@ -181,7 +187,7 @@ inline dynamics::Model<S, MB, MD> defaultAvatar(const AvatarOptions& o = AvatarO
 // (3 = constant density, the default; 1 = mass proportional to height) and rotational inertia by
 // factor^(mass_exponent + 2).
 template <class S, int MB, int MD>
-inline dynamics::Model<S, MB, MD> scaleModel(const dynamics::Model<S, MB, MD>& in, S factor, S mass_exponent = S(3)) {
+inline dynamics::Model<S, MB, MD> scale_model(const dynamics::Model<S, MB, MD>& in, S factor, S mass_exponent = S(3)) {
   dynamics::Model<S, MB, MD> m = in;
   const S km = std::pow(factor, mass_exponent);
   for (int i = 0; i < m.nb; ++i) {
@@ -198,9 +204,9 @@ inline dynamics::Model<S, MB, MD> scaleModel(const dynamics::Model<S, MB, MD>& i
 // The default (1.75 m) avatar scaled to a user's height, as QuestSim initialises its character from
 // the headset height (PD gains kept; users can rescale them with the mass).
 template <class S, int MB = 24, int MD = 72>
-inline dynamics::Model<S, MB, MD> avatarForUserHeight(double user_height, AvatarOptions o = AvatarOptions{}) {
+inline dynamics::Model<S, MB, MD> avatar_for_user_height(double user_height, AvatarOptions o = AvatarOptions{}) {
   const double ref = o.height;
-  return scaleModel(defaultAvatar<S, MB, MD>(o), S(user_height / ref));
+  return scale_model(default_avatar<S, MB, MD>(o), S(user_height / ref));
 }
 
 }  // namespace sparsebody::character

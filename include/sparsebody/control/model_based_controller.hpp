@@ -144,7 +144,7 @@ class ModelBasedController {
       support_on_ = false;
       if (cfg_.stance_support) {
         // The root wrench in the world (RNEA's root entries are body-frame), about the root origin.
-        const dynamics::Mat3<S> Rq = dynamics::readQuat<S>(q, r.q_index + 3).toRotationMatrix();
+        const dynamics::Mat3<S> Rq = dynamics::read_quat<S>(q, r.q_index + 3).toRotationMatrix();
         support_F_ = Rq * Vec3(tau_ff_.template segment<3>(r.v_index + 3));
         support_N_ = Rq * Vec3(tau_ff_.template segment<3>(r.v_index));
         support_c_[0] = contact[0];
@@ -152,7 +152,7 @@ class ModelBasedController {
         if (cfg_.support_at_state) {
           support_on_ = support_F_.allFinite() && support_N_.allFinite();
         } else {
-          dynamics::forwardKinematics(m, d_, q, &v1_, true);
+          dynamics::forward_kinematics(m, d_, q, &v1_, true);
           fk_of_q_ = true;
           support(m, d_, support_F_, support_N_, contact, S(1), tau_ff_);
         }
@@ -169,9 +169,9 @@ class ModelBasedController {
     const S lift = !cfg_.ground_reference ? S(0) : fk_of_q_ ? ground_lift_of_kinematics(m) : ground_lift(m, q);
     fk_of_q_ = false;
     from_p_ = has_ref_ ? p_ref_ : Vec3(q.template segment<3>(k) + lift * Vec3::UnitY());
-    from_R_ = has_ref_ ? R_ref_ : dynamics::readQuat<S>(q, k + 3);
+    from_R_ = has_ref_ ? R_ref_ : dynamics::read_quat<S>(q, k + 3);
     p_ref_ = q.template segment<3>(k) + lift * Vec3::UnitY();
-    R_ref_ = dynamics::readQuat<S>(q, k + 3);
+    R_ref_ = dynamics::read_quat<S>(q, k + 3);
     v_ref_ = (q.template segment<3>(k) - q_prev.template segment<3>(k)) / dt;
     w_ref_ = R_ref_ * Vec3(v1_.template segment<3>(r.v_index));
     has_ref_ = true;
@@ -181,7 +181,7 @@ class ModelBasedController {
   // max_ground_lift): the predicted pose put on the avatar's feet penetrates it by 4.5 cm on
   // average on the validation clips (its feet and soles are not the skeleton's).
   S ground_lift(const ModelT& m, const VecQ& q) noexcept {
-    dynamics::forwardKinematics(m, d_, q, static_cast<const VecV*>(nullptr), true);
+    dynamics::forward_kinematics(m, d_, q, static_cast<const VecV*>(nullptr), true);
     return ground_lift_of_kinematics(m);
   }
 
@@ -190,7 +190,7 @@ class ModelBasedController {
     S lo = 0;
     for (int c = 0; c < m.num_points; ++c) {
       const auto& pt = m.points[c];
-      lo = std::min(lo, dynamics::pointPosition(d_, pt.body, pt.pos).y() - pt.radius);
+      lo = std::min(lo, dynamics::point_position(d_, pt.body, pt.pos).y() - pt.radius);
     }
     return std::isfinite(lo) ? std::min(-lo, S(cfg_.max_ground_lift)) : S(0);
   }
@@ -200,7 +200,7 @@ class ModelBasedController {
   // Torques of one simulation step (written into tau: feed-forward, plus the residual wrench in
   // ResidualMode::Distributed) and, in ResidualMode::RootServo, the simulator's root servo set to
   // the interpolated root reference (sim.root_servo, the root entries of targets() and
-  // targetVelocities()); the wrench it applies is known after the step: residual_applied(sim).
+  // target_velocities()); the wrench it applies is known after the step: residual_applied(sim).
   // alpha in [0, 1]: how far through the current reference frame this step ends.
   ResidualWrench apply(const ModelT& m, dynamics::Simulator<S, MB, MD>& sim, S alpha, VecV& tau) noexcept {
     tau = tau_ff_;
@@ -224,7 +224,7 @@ class ModelBasedController {
       qt.template segment<3>(r.q_index) = pr;
       qt(r.q_index + 3) = Rr.w();
       qt.template segment<3>(r.q_index + 4) = Rr.vec();
-      auto& vt = sim.targetVelocities();  // target body frame: (R_r^T w_ref, R_r^T v_ref)
+      auto& vt = sim.target_velocities();  // target body frame: (R_r^T w_ref, R_r^T v_ref)
       vt.template segment<3>(r.v_index) = Rr.conjugate() * w_ref_;
       vt.template segment<3>(r.v_index + 3) = Rr.conjugate() * v_ref_;
       return last_;
@@ -233,7 +233,7 @@ class ModelBasedController {
     const dynamics::Mat3<S>& R = d.R[root_];
     const Vec3 w = R * Vec3(d.v[root_].template head<3>()), v = R * Vec3(d.v[root_].template tail<3>());
     Vec3 F = S(cfg_.root_kp) * (pr - d.p[root_]) + S(cfg_.root_kd) * (v_ref_ - v);
-    Vec3 N = S(cfg_.root_kr) * dynamics::quatLog(Quat(Rr * Quat(R).conjugate())) + S(cfg_.root_dr) * (w_ref_ - w);
+    Vec3 N = S(cfg_.root_kr) * dynamics::quat_log(Quat(Rr * Quat(R).conjugate())) + S(cfg_.root_dr) * (w_ref_ - w);
     clamp(F, S(cfg_.max_force));
     clamp(N, S(cfg_.max_torque));
     if (!F.allFinite() || !N.allFinite()) return last_;
@@ -247,8 +247,8 @@ class ModelBasedController {
   // wrench in ResidualMode::RootServo, the distributed resultant otherwise.
   ResidualWrench residual_applied(const dynamics::Simulator<S, MB, MD>& sim) noexcept {
     if (cfg_.residual_mode == ResidualMode::RootServo && sim.root_servo.enabled) {
-      last_.force = double(sim.rootServoForce().norm());
-      last_.torque = double(sim.rootServoTorque().norm());
+      last_.force = double(sim.root_servo_force().norm());
+      last_.torque = double(sim.root_servo_torque().norm());
     }
     return last_;
   }
@@ -269,7 +269,7 @@ class ModelBasedController {
     Vec3 c = Vec3::Zero();
     S M = 0;
     for (int i = 0; i < m.nb; ++i) {
-      x_[i] = dynamics::pointPosition(d, i, m.bodies[i].com);
+      x_[i] = dynamics::point_position(d, i, m.bodies[i].com);
       c += m.bodies[i].mass * x_[i];
       M += m.bodies[i].mass;
     }
@@ -295,7 +295,7 @@ class ModelBasedController {
         case dynamics::JointType::Revolute: tau(b.v_index) += b.axis.dot(fb_[i].template head<3>()); break;
         case dynamics::JointType::Fixed: break;
       }
-      if (b.parent >= 0) fb_[b.parent] += d.X[i].applyTransposeForce(fb_[i]);
+      if (b.parent >= 0) fb_[b.parent] += d.X[i].apply_transpose_force(fb_[i]);
     }
   }
 
@@ -311,10 +311,10 @@ class ModelBasedController {
       J_.resize(6, m.nv);
       // The root wrench (N about the root origin, F) received by the foot: its Jacobian at the root origin.
       const Vec3 at = cfg_.support_moment ? Vec3(dd.R[foot_[s]].transpose() * (dd.p[root_] - dd.p[foot_[s]])) : Vec3::Zero();
-      dynamics::bodyJacobian(m, dd, foot_[s], at, J_);
+      dynamics::body_jacobian(m, dd, foot_[s], at, J_);
       for (int c = 0; c < leg_len_[s]; ++c) {
         const dynamics::Body<S>& b = m.bodies[leg_[s][c]];
-        for (int k = 0; k < m.nvOf(leg_[s][c]); ++k) {
+        for (int k = 0; k < m.nv_of(leg_[s][c]); ++k) {
           S t = Vec3(J_.template block<3, 1>(3, b.v_index + k)).dot(share * F);
           if (cfg_.support_moment) t += Vec3(J_.template block<3, 1>(0, b.v_index + k)).dot(share * N);
           tau(b.v_index + k) -= t;

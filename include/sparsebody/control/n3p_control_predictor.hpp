@@ -31,7 +31,7 @@
 #include <memory>
 #include <string>
 
-#include "sparsebody/avatar/n3p_predictor.hpp"
+#include "sparsebody/predict/n3p_predictor.hpp"
 #include "sparsebody/control/n3p_policy_input.hpp"
 #include "sparsebody/control/n3p_sim_retarget.hpp"
 #include "sparsebody/dynamics/kinematics.hpp"
@@ -44,7 +44,7 @@ namespace sparsebody::control {
 template <typename T, int HSig, int HLo, int HUp, typename S, int MB, int MD, typename W = T>
 class N3PControlPredictor {
  public:
-  using Predictor = avatar::N3PPredictor<T, HSig, HLo, HUp, W>;
+  using Predictor = predict::N3PPredictor<T, HSig, HLo, HUp, W>;
   using PolicyNet = networks::N3PPolicyNet<T, n3p_policy::kPolicyIn, n3p_policy::kPolicyOut, 256, W>;
   using PolicyWeights = nn::NetworkWeights<PolicyNet>;
   using ModelT = dynamics::Model<S, MB, MD>;
@@ -93,7 +93,7 @@ class N3PControlPredictor {
     if (!started_) return false;
     namespace n3p = features::n3p;
     const pose::Skeleton& sk = pred_.skeleton();
-    const avatar::N3PMeta& meta = pred_.meta();
+    const predict::N3PMeta& meta = pred_.meta();
     // 1. the committed state with the character's joint states, in h^{t-3} = h_ref.
     work_ = committed_;
     const features::HeadingFrame href = committed_.h;
@@ -101,7 +101,7 @@ class N3PControlPredictor {
     for (int j = 0; j < sk.size(); ++j) {
       const int b = rt.body_of(j);
       p_[j] = rt.from_sim_point(d.p[b].template cast<double>());
-      v_[j] = dynamics::pointVelocity(d, b, origin).template cast<double>();
+      v_[j] = dynamics::point_velocity(d, b, origin).template cast<double>();
       R_[j] = d.R[b].template cast<double>() * rt.alignment(j).conjugate().toRotationMatrix();  // W^s = W^a A^-1
     }
     auto write = [&](T* g, int K, int i, int j) {

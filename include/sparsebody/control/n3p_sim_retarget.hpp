@@ -169,15 +169,15 @@ class N3PSimRetarget {
       const int k = b.q_index, c = b.v_index;
       switch (b.joint) {
         case dynamics::JointType::Free: {
-          const dynamics::Quat<S> a = dynamics::readQuat<S>(q0, k + 3), e = dynamics::readQuat<S>(q1, k + 3);
-          v.template segment<3>(c) = dynamics::quatLog(dynamics::Quat<S>(a.conjugate() * e)) / dt;
+          const dynamics::Quat<S> a = dynamics::read_quat<S>(q0, k + 3), e = dynamics::read_quat<S>(q1, k + 3);
+          v.template segment<3>(c) = dynamics::quat_log(dynamics::Quat<S>(a.conjugate() * e)) / dt;
           v.template segment<3>(c + 3) =
               e.toRotationMatrix().transpose() * (q1.template segment<3>(k) - q0.template segment<3>(k)) / dt;
           break;
         }
         case dynamics::JointType::Spherical: {
-          const dynamics::Quat<S> a = dynamics::readQuat<S>(q0, k), e = dynamics::readQuat<S>(q1, k);
-          v.template segment<3>(c) = dynamics::quatLog(dynamics::Quat<S>(a.conjugate() * e)) / dt;
+          const dynamics::Quat<S> a = dynamics::read_quat<S>(q0, k), e = dynamics::read_quat<S>(q1, k);
+          v.template segment<3>(c) = dynamics::quat_log(dynamics::Quat<S>(a.conjugate() * e)) / dt;
           break;
         }
         case dynamics::JointType::Revolute:

@@ -32,7 +32,7 @@
 //                                                            position (3) + first two columns (6)
 //   2NJ + 15NB + 6 + 27(NF+1) 1           o_user,scale      user height (m), Eq. (3)
 //
-// Size = 2 NJ + 15 NB + 6 + 27 (NF + 1) + 1 (questSimObservationSize). The paper's character
+// Size = 2 NJ + 15 NB + 6 + 27 (NF + 1) + 1 (quest_sim_observation_size). The paper's character
 // (16 links, 33 DoF) gives o_sim = 312 exactly as stated in §3.3. For o_user the paper states both
 // "6 future observations" and o_user in R^{6x3x9} = R^162; we follow the issue (current + 6 future
 // = 7 frames, 189 values) and keep NF a template parameter (NF = 5 gives the paper's 162).
@@ -48,6 +48,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "sparsebody/character/avatar.hpp"
 #include "sparsebody/dynamics/kinematics.hpp"
 #include "sparsebody/dynamics/simulator.hpp"
 #include "sparsebody/features/heading_frame.hpp"
@@ -55,13 +56,9 @@
 namespace sparsebody::control {
 
 // Number of observation values for `bodies` links, `joint_dofs` non-root DoFs, `future` frames.
-constexpr int questSimObservationSize(int bodies, int joint_dofs, int future = 6) {
+constexpr int quest_sim_observation_size(int bodies, int joint_dofs, int future = 6) {
   return 2 * joint_dofs + 15 * bodies + 6 + 27 * (future + 1) + 1;
 }
-
-// The default avatar (character::defaultAvatar: 21 bodies, nv = 54 with hinge knees/elbows/toes).
-inline constexpr int kDefaultAvatarBodies = 21;
-inline constexpr int kDefaultAvatarJointDofs = 48;
 
 // Offsets of each block (see the table above).
 template <int NB, int NJ, int NF = 6>
@@ -79,7 +76,7 @@ struct QuestSimLayout {
   static constexpr int user = sim_size;                     // o_user
   static constexpr int height = user + kFrames * kUserFrameSize;  // o_user,scale
   static constexpr int size = height + 1;
-  static_assert(size == questSimObservationSize(NB, NJ, NF), "layout and size formula disagree");
+  static_assert(size == quest_sim_observation_size(NB, NJ, NF), "layout and size formula disagree");
 };
 
 // One sensor sample in world coordinates (the simulator's world = the OpenXR stage space: Y up,
@@ -98,7 +95,7 @@ struct QuestSimFloorFrame {
   dynamics::Vec3<S> origin = dynamics::Vec3<S>::Zero();
   S c = S(1), s = S(0);  // cos theta, sin theta
 
-  static QuestSimFloorFrame fromRoot(const dynamics::Mat3<S>& R_root, const dynamics::Vec3<S>& p_root) noexcept {
+  static QuestSimFloorFrame from_root(const dynamics::Mat3<S>& R_root, const dynamics::Vec3<S>& p_root) noexcept {
     const dynamics::Vec3<S> fwd = R_root.col(2);
     const features::HeadingFrame h = features::HeadingFrame::from(
         Eigen::Vector3d(double(p_root.x()), 0.0, double(p_root.z())),
@@ -118,7 +115,7 @@ struct QuestSimFloorFrame {
 
 // Writes a position (3) and the first two columns of the rotation (6), both in S.
 template <class S, class T>
-inline void writePose6(const QuestSimFloorFrame<S>& fs, const dynamics::Vec3<S>& p, const dynamics::Mat3<S>& R,
+inline void write_pose6(const QuestSimFloorFrame<S>& fs, const dynamics::Vec3<S>& p, const dynamics::Mat3<S>& R,
                        T* pos, T* rot6) noexcept {
   const dynamics::Vec3<S> ps = fs.point(p), c0 = fs.vector(R.col(0)), c1 = fs.vector(R.col(1));
   for (int k = 0; k < 3; ++k) {
@@ -133,7 +130,7 @@ inline void writePose6(const QuestSimFloorFrame<S>& fs, const dynamics::Vec3<S>&
 // `out` receives QuestSimLayout<NB, NJ, NF>::size values. The model must have NB bodies, a free
 // root (body 0) and nv = NJ + 6 (QuestSimObservationBuilder checks this once).
 template <int NB, int NJ, int NF, class S, int MB, int MD, class T>
-inline void buildQuestSimObservation(const dynamics::Model<S, MB, MD>& m, const dynamics::Data<S, MB, MD>& d,
+inline void build_quest_sim_observation(const dynamics::Model<S, MB, MD>& m, const dynamics::Data<S, MB, MD>& d,
                                      const typename dynamics::Model<S, MB, MD>::VecQ& q,
                                      const typename dynamics::Model<S, MB, MD>::VecV& v,
                                      const std::array<dynamics::Vec3<S>, 2>& foot_force,
@@ -142,13 +139,13 @@ inline void buildQuestSimObservation(const dynamics::Model<S, MB, MD>& m, const 
   using L = QuestSimLayout<NB, NJ, NF>;
   using dynamics::JointType;
   using V3 = dynamics::Vec3<S>;
-  const QuestSimFloorFrame<S> fs = QuestSimFloorFrame<S>::fromRoot(d.R[0], d.p[0]);
+  const QuestSimFloorFrame<S> fs = QuestSimFloorFrame<S>::from_root(d.R[0], d.p[0]);
   // o_sim,q and o_sim,qd: non-root joints in body order (v_index - 6 is the slot).
   for (int i = 1; i < NB; ++i) {
     const dynamics::Body<S>& b = m.bodies[i];
     const int k = b.v_index - 6;
     if (b.joint == JointType::Spherical) {
-      const V3 r = dynamics::quatLog(dynamics::readQuat<S>(q, b.q_index));
+      const V3 r = dynamics::quat_log(dynamics::read_quat<S>(q, b.q_index));
       for (int a = 0; a < 3; ++a) {
         out[L::q + k + a] = static_cast<T>(r(a));
         out[L::qd + k + a] = static_cast<T>(v(b.v_index + a));
@@ -160,7 +157,7 @@ inline void buildQuestSimObservation(const dynamics::Model<S, MB, MD>& m, const 
   }
   // Links: x, R (6D), linear and angular velocity, all in S.
   for (int i = 0; i < NB; ++i) {
-    writePose6(fs, d.p[i], d.R[i], out + L::x + 3 * i, out + L::R + 6 * i);
+    write_pose6(fs, d.p[i], d.R[i], out + L::x + 3 * i, out + L::R + 6 * i);
     const V3 vl = fs.vector(d.R[i] * V3(d.v[i].template tail<3>()));
     const V3 w = fs.vector(d.R[i] * V3(d.v[i].template head<3>()));
     for (int a = 0; a < 3; ++a) {
@@ -177,14 +174,14 @@ inline void buildQuestSimObservation(const dynamics::Model<S, MB, MD>& m, const 
   for (int t = 0; t <= NF; ++t)
     for (int dev = 0; dev < 3; ++dev) {
       T* o = out + L::user + L::kUserFrameSize * t + 9 * dev;
-      writePose6(fs, user[t][dev].position, user[t][dev].rotation, o, o + 3);
+      write_pose6(fs, user[t][dev].position, user[t][dev].rotation, o, o + 3);
     }
   out[L::height] = static_cast<T>(user_height);  // Eq. (3)
 }
 
 // Binds the observation to one model: checks its shape once (constructor, may throw) and knows
 // which bodies form each foot. build() is the per-step call.
-template <class S, int MB, int MD, int NB = kDefaultAvatarBodies, int NJ = kDefaultAvatarJointDofs, int NF = 6>
+template <class S, int MB, int MD, int NB = character::kDefaultAvatarBodies, int NJ = character::kDefaultAvatarJointDofs, int NF = 6>
 class QuestSimObservationBuilder {
  public:
   using Layout = QuestSimLayout<NB, NJ, NF>;
@@ -213,22 +210,22 @@ class QuestSimObservationBuilder {
 
   // Sum of the contact forces of the simulator's last step on each foot (world, N).
   template <int MC, int MBox>
-  std::array<dynamics::Vec3<S>, 2> footForces(const dynamics::Simulator<S, MB, MD, MC, MBox>& sim) const noexcept {
+  std::array<dynamics::Vec3<S>, 2> foot_forces(const dynamics::Simulator<S, MB, MD, MC, MBox>& sim) const noexcept {
     std::array<dynamics::Vec3<S>, 2> f{dynamics::Vec3<S>::Zero(), dynamics::Vec3<S>::Zero()};
-    for (int k = 0; k < sim.numContacts(); ++k) {
-      const auto& c = sim.contactAt(k);
+    for (int k = 0; k < sim.num_contacts(); ++k) {
+      const auto& c = sim.contact_at(k);
       const int side = foot_of_body_[c.body];
       if (side >= 0 && c.active) f[side] += c.force;
     }
     return f;
   }
-  int footOfBody(int body) const noexcept { return foot_of_body_[body]; }
+  int foot_of_body(int body) const noexcept { return foot_of_body_[body]; }
 
   // The observation of the simulator's current state (T = the policy's scalar).
   template <class T, int MC, int MBox>
   void build(const dynamics::Simulator<S, MB, MD, MC, MBox>& sim, const UserWindow& user, S user_height,
              T* out) const noexcept {
-    buildQuestSimObservation<NB, NJ, NF>(sim.model(), sim.data(), sim.q(), sim.v(), footForces(sim), user,
+    build_quest_sim_observation<NB, NJ, NF>(sim.model(), sim.data(), sim.q(), sim.v(), foot_forces(sim), user,
                                          user_height, out);
   }
 

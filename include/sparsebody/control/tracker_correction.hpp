@@ -57,16 +57,16 @@ class TrackerCorrection {
       const int h = hand_[s];
       J_.resize(6, m.nv);
       const Vec3 origin = Vec3::Zero();
-      dynamics::bodyJacobian(m, d, h, origin, J_);
+      dynamics::body_jacobian(m, d, h, origin, J_);
       const Vec3 p = d.p[h];
-      const Vec3 v = dynamics::pointVelocity(d, h, origin);
+      const Vec3 v = dynamics::point_velocity(d, h, origin);
       Vec3 F = S(cfg_.kp) * (target[s] - p) - S(cfg_.kd) * v;  // Eq. (19)
       const S n = F.norm();
       if (n > S(cfg_.max_force)) F *= S(cfg_.max_force) / n;
       if (!F.allFinite()) continue;
       for (int c = 0; c < chain_len_[s]; ++c) {  // tau = J^T F on the arm chain's DoFs only
         const dynamics::Body<S>& b = m.bodies[chain_[s][c]];
-        for (int k = 0; k < m.nvOf(chain_[s][c]); ++k)
+        for (int k = 0; k < m.nv_of(chain_[s][c]); ++k)
           tau(b.v_index + k) += Vec3(J_.template block<3, 1>(3, b.v_index + k)).dot(F);
       }
       force_[s] = double(F.norm());

@@ -12,24 +12,24 @@
 // same implicit form, D_root = I^A_root + h K_r. The root's joint force is I^A a + p^A with
 // a = qdd + a' (a' = X a_0: gravity), so (I^A + h K_r) a = tau - p^A + h K_r a'.
 #pragma once
-#include "kinematics.hpp"
+#include "sparsebody/dynamics/kinematics.hpp"
 
 namespace sparsebody::dynamics {
 
 // Pass 1: kinematics plus the per-body velocity-product force v x* I v.
 template <class S, int MB, int MD>
-inline void abaKinematics(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecQ& q,
+inline void aba_kinematics(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecQ& q,
                           const typename Model<S, MB, MD>::VecV& qd, bool with_world = false) {
-  forwardKinematics(m, d, q, &qd, with_world);
-  for (int i = 0; i < m.nb; ++i) d.bias[i] = crossForce(d.v[i], mul6v(m.bodies[i].I, d.v[i]));
+  forward_kinematics(m, d, q, &qd, with_world);
+  for (int i = 0; i < m.nb; ++i) d.bias[i] = cross_force(d.v[i], mul6v(m.bodies[i].I, d.v[i]));
 }
 
-// Passes 2 and 3, after abaKinematics. h_damp = h for implicit damping, 0 for explicit.
+// Passes 2 and 3, after aba_kinematics. h_damp = h for implicit damping, 0 for explicit.
 // When include_kd is false only the passive damping is implicit (torque-driven use).
 // root_damping: K_r's diagonal (angular then linear, free-root layout), nullptr for none.
 // Returns false when a joint-space term D_i is not positive (degenerate model or NaN).
 template <class S, int MB, int MD>
-inline bool abaSolve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
+inline bool aba_solve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
                      typename Model<S, MB, MD>::VecV& qdd, S h_damp, bool include_kd = true,
                      const Vec6<S>* root_damping = nullptr) {
   bool ok = true;
@@ -53,8 +53,8 @@ inline bool abaSolve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typena
         if (root_damping) {
           Mat6<S> D = IA;
           for (int r = 0; r < 6; ++r) D(r, r) += h_damp * (*root_damping)(r);
-          if (!choleskyFactor6(D, d.root_L)) ok = false;
-        } else if (!choleskyFactor6(IA, d.root_L)) {
+          if (!cholesky_factor6(D, d.root_L)) ok = false;
+        } else if (!cholesky_factor6(IA, d.root_L)) {
           ok = false;
         }
         d.u[i].setZero();
@@ -67,7 +67,7 @@ inline bool abaSolve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typena
         SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c)
           SPARSEBODY_UNROLL for (int r = 0; r < 3; ++r) D(r, c) = IA(r, c);
         D(0, 0) += kdamp; D(1, 1) += kdamp; D(2, 2) += kdamp;
-        const Mat3<S> Dinv = inverseSym3(D);
+        const Mat3<S> Dinv = inverse_sym3(D);
         d.Dinv[i] = Dinv;
         if (!(D(0, 0) > S(0)) || !Dinv.allFinite()) ok = false;
         const int k = b.v_index;
@@ -121,8 +121,8 @@ inline bool abaSolve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typena
         pa = pA + mul6v(IA, d.c[i]);
         break;
     }
-    addTransformedInertia(d.X[i], Ia, d.IA[b.parent]);        // I^A_lambda += X^T I^a X
-    d.pA[b.parent] += d.X[i].applyTransposeForce(pa);          // p^A_lambda += X^T p^a
+    add_transformed_inertia(d.X[i], Ia, d.IA[b.parent]);        // I^A_lambda += X^T I^a X
+    d.pA[b.parent] += d.X[i].apply_transpose_force(pa);          // p^A_lambda += X^T p^a
   }
   Vec6<S> a0 = Vec6<S>::Zero();
   a0.template tail<3>() = -m.gravity;
@@ -138,7 +138,7 @@ inline bool abaSolve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typena
         for (int r = 0; r < 6; ++r) x(r) = tau(k + r) - d.pA[i](r);
         if (root_damping)
           for (int r = 0; r < 6; ++r) x(r) += h_damp * (*root_damping)(r) * ap(r);
-        choleskySolve6(d.root_L, x);
+        cholesky_solve6(d.root_L, x);
         for (int r = 0; r < 6; ++r) qdd(k + r) = x(r) - ap(r);
         d.a[i] = x;
         break;
@@ -182,8 +182,8 @@ inline bool aba(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Mo
                 const typename Model<S, MB, MD>::VecV& qd, const typename Model<S, MB, MD>::VecV& tau,
                 typename Model<S, MB, MD>::VecV& qdd, S h_damp = S(0), bool include_kd = true,
                 const Vec6<S>* root_damping = nullptr) {
-  abaKinematics(m, d, q, qd);
-  return abaSolve(m, d, tau, qdd, h_damp, include_kd, root_damping);
+  aba_kinematics(m, d, q, qd);
+  return aba_solve(m, d, tau, qdd, h_damp, include_kd, root_damping);
 }
 
 }  // namespace sparsebody::dynamics

@@ -18,7 +18,7 @@
 #pragma once
 #include <array>
 
-#include "aba.hpp"
+#include "sparsebody/dynamics/aba.hpp"
 
 namespace sparsebody::dynamics {
 
@@ -47,7 +47,7 @@ struct Environment {
   S ground_offset = S(0);
   std::array<StaticBox<S>, MaxBoxes> boxes{};
   int num_boxes = 0;
-  bool addBox(const StaticBox<S>& b) {
+  bool add_box(const StaticBox<S>& b) {
     if (num_boxes >= MaxBoxes) return false;
     boxes[num_boxes++] = b;
     return true;
@@ -70,7 +70,7 @@ struct Contact {
 
 // Signed distance from a point to a static box and the outward normal.
 template <class S>
-inline S boxDistance(const StaticBox<S>& b, const Vec3<S>& x, Vec3<S>& normal) {
+inline S box_distance(const StaticBox<S>& b, const Vec3<S>& x, Vec3<S>& normal) {
   const Vec3<S> l = b.R.transpose() * (x - b.center);
   const Vec3<S> dd = l.cwiseAbs() - b.half;
   if (dd.maxCoeff() < S(0)) {
@@ -93,7 +93,7 @@ inline S boxDistance(const StaticBox<S>& b, const Vec3<S>& x, Vec3<S>& normal) {
 // a foot that keeps slipping under steady torques then needs one solve instead of the 3 passes that
 // discover the slip and refine c_s (QuestSim substep from rest: 30.6 -> 12.9 us).
 template <class S, int MB, int MD, int MaxBoxes, std::size_t MaxContacts>
-inline int detectContacts(const Model<S, MB, MD>& m, const Data<S, MB, MD>& d, const Environment<S, MaxBoxes>& env,
+inline int detect_contacts(const Model<S, MB, MD>& m, const Data<S, MB, MD>& d, const Environment<S, MaxBoxes>& env,
                           const ContactParams<S>& par, std::array<Contact<S>, MaxContacts>& out, int& overflow,
                           const Contact<S>* prev = nullptr, int nprev = 0) {
   int nc = 0;
@@ -115,7 +115,7 @@ inline int detectContacts(const Model<S, MB, MD>& m, const Data<S, MB, MD>& d, c
     // A point already slipping starts in sliding mode, with Fn guessed from the spring-damper at
     // the current state (refined by the passes); a sticking first guess would need a huge
     // tangential force to stop it and distort the normal forces of that pass.
-    const Vec3<S> vpw = pointVelocity(d, body, c.p);
+    const Vec3<S> vpw = point_velocity(d, body, c.p);
     const S vn = vpw.dot(n);
     const S vt = (vpw - vn * n).norm();
     if (vt > S(10) * par.slip_eps) {
@@ -141,7 +141,7 @@ inline int detectContacts(const Model<S, MB, MD>& m, const Data<S, MB, MD>& d, c
     }
     for (int b = 0; b < env.num_boxes; ++b) {
       Vec3<S> n;
-      const S dist = boxDistance(env.boxes[b], x, n) - cp.radius;
+      const S dist = box_distance(env.boxes[b], x, n) - cp.radius;
       if (dist < par.margin) push(cp.body, x, cp.radius, n, dist, k, 1 + b);
     }
   }
@@ -152,7 +152,7 @@ inline int detectContacts(const Model<S, MB, MD>& m, const Data<S, MB, MD>& d, c
 // a_p = P a + beta (a: the body's ABA acceleration including the fictitious -g, beta the known
 // velocity-product and gravity terms). Writes C_b (body) and F0' = F0 - h C beta (body).
 template <class S, int MB, int MD>
-inline void contactLinearization(const Data<S, MB, MD>& d, const Contact<S>& c, const ContactParams<S>& par,
+inline void contact_linearization(const Data<S, MB, MD>& d, const Contact<S>& c, const ContactParams<S>& par,
                                  const Vec3<S>& gravity, S h, Mat3<S>& Cb, Vec3<S>& F0b, Vec3<S>* vp_out = nullptr,
                                  Vec3<S>* beta_out = nullptr) {
   const Mat3<S>& R = d.R[c.body];
@@ -173,7 +173,7 @@ inline void contactLinearization(const Data<S, MB, MD>& d, const Contact<S>& c, 
 
 // Adds every active contact to d.Kext / d.fext (h P^T C P and P^T F0').
 template <class S, int MB, int MD, std::size_t MaxContacts>
-inline void assembleContacts(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const std::array<Contact<S>, MaxContacts>& cs,
+inline void assemble_contacts(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const std::array<Contact<S>, MaxContacts>& cs,
                              int nc, const ContactParams<S>& par, S h) {
   for (int i = 0; i < m.nb; ++i) { d.fext[i].setZero(); d.Kext[i].setZero(); }
   d.has_ext = true;
@@ -182,7 +182,7 @@ inline void assembleContacts(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, cons
     if (!c.active) continue;
     Mat3<S> Cb;
     Vec3<S> F0b;
-    contactLinearization(d, c, par, m.gravity, h, Cb, F0b);
+    contact_linearization(d, c, par, m.gravity, h, Cb, F0b);
     const Mat3<S> px = skew(c.p);
     // P = [-p^, I]; P^T C P = [-p^ C p^... ] written blockwise: [[-p^Cp^, p^C], [-Cp^, C]] * h
     const Mat3<S> pxC = px * Cb;
@@ -199,14 +199,14 @@ inline void assembleContacts(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, cons
 
 // After a solve: evaluates each contact force, updates the active set. Returns true if it changed.
 template <class S, int MB, int MD, std::size_t MaxContacts>
-inline bool updateContactSet(const Model<S, MB, MD>& m, const Data<S, MB, MD>& d, std::array<Contact<S>, MaxContacts>& cs,
+inline bool update_contact_set(const Model<S, MB, MD>& m, const Data<S, MB, MD>& d, std::array<Contact<S>, MaxContacts>& cs,
                              int nc, const ContactParams<S>& par, S h) {
   bool changed = false;
   for (int k = 0; k < nc; ++k) {
     Contact<S>& c = cs[k];
     Mat3<S> Cb;
     Vec3<S> F0b, vp;
-    contactLinearization(d, c, par, m.gravity, h, Cb, F0b, &vp);
+    contact_linearization(d, c, par, m.gravity, h, Cb, F0b, &vp);
     const Vec6<S>& a = d.a[c.body];
     const Vec3<S> Pa = Vec3<S>(a.template tail<3>()) - c.p.cross(Vec3<S>(a.template head<3>()));  // P a
     const Vec3<S> F = d.R[c.body] * (F0b - h * (Cb * Pa));

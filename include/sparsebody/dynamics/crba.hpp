@@ -1,23 +1,23 @@
 // Composite-rigid-body algorithm (Featherstone Table 6.2): joint-space inertia matrix M(q).
 // O(n d) and dense output, so the step never uses it; it is the independent oracle for ABA.
 #pragma once
-#include "kinematics.hpp"
+#include "sparsebody/dynamics/kinematics.hpp"
 
 namespace sparsebody::dynamics {
 
 template <class S, int MB, int MD>
 inline void crba(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecQ& q) {
-  forwardKinematics(m, d, q, nullptr, false);
+  forward_kinematics(m, d, q, nullptr, false);
   for (int i = 0; i < m.nb; ++i) d.Ic[i] = m.bodies[i].I;
   for (int i = m.nb - 1; i >= 0; --i) {
     const int pi = m.bodies[i].parent;
-    if (pi >= 0) addTransformedInertia(d.X[i], d.Ic[i], d.Ic[pi]);  // I^c_lambda += X^T I^c_i X
+    if (pi >= 0) add_transformed_inertia(d.X[i], d.Ic[i], d.Ic[pi]);  // I^c_lambda += X^T I^c_i X
   }
   d.Mass.setZero(m.nv, m.nv);
   using F6 = Eigen::Matrix<S, 6, Eigen::Dynamic, 0, 6, 6>;
   for (int i = 0; i < m.nb; ++i) {
     const Body<S>& b = m.bodies[i];
-    const int ni = jointNv(b.joint);
+    const int ni = joint_nv(b.joint);
     if (ni == 0) continue;
     F6 F(6, ni);  // F = I^c_i S_i
     switch (b.joint) {
@@ -28,7 +28,7 @@ inline void crba(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename M
     // Column block j of row i: S_j^T F, walking F up the tree with X^T.
     for (int j = i;;) {
       const Body<S>& bj = m.bodies[j];
-      const int nj = jointNv(bj.joint);
+      const int nj = joint_nv(bj.joint);
       if (nj > 0) {
         Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6> blk(nj, ni);
         switch (bj.joint) {
@@ -41,7 +41,7 @@ inline void crba(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename M
       }
       const int pj = bj.parent;
       if (pj < 0) break;
-      for (int k = 0; k < ni; ++k) F.col(k) = d.X[j].applyTransposeForce(Vec6<S>(F.col(k)));
+      for (int k = 0; k < ni; ++k) F.col(k) = d.X[j].apply_transpose_force(Vec6<S>(F.col(k)));
       j = pj;
     }
   }

@@ -5,7 +5,7 @@
 
 #include <Eigen/Cholesky>
 
-#include "model.hpp"
+#include "sparsebody/dynamics/model.hpp"
 
 namespace sparsebody::dynamics {
 
@@ -41,9 +41,9 @@ struct Data {
     Mass.setZero(m.nv, m.nv);
     qdd.setZero(m.nv);
     tau.setZero(m.nv);
-    clearExternal();
+    clear_external();
   }
-  void clearExternal() {
+  void clear_external() {
     for (auto& x : fext) x.setZero();
     for (auto& x : Kext) x.setZero();
     has_ext = false;

@@ -1,17 +1,17 @@
-// Body and point Jacobians in world coordinates (after forwardKinematics). Column k of a body's
+// Body and point Jacobians in world coordinates (after forward_kinematics). Column k of a body's
 // Jacobian is the world-frame motion produced by unit velocity of DoF k of one of its ancestors.
 #pragma once
-#include "kinematics.hpp"
+#include "sparsebody/dynamics/kinematics.hpp"
 
 namespace sparsebody::dynamics {
 
 // 6 x nv spatial Jacobian of body i: rows (angular; linear velocity of the body origin), world frame.
 // J may be any Eigen matrix with 6 rows and >= nv columns; untouched columns are zeroed.
 template <class S, int MB, int MD, class Mat>
-inline void bodyJacobian(const Model<S, MB, MD>& m, const Data<S, MB, MD>& d, int i, const Vec3<S>& point_body,
+inline void body_jacobian(const Model<S, MB, MD>& m, const Data<S, MB, MD>& d, int i, const Vec3<S>& point_body,
                          Mat& J) {
   J.setZero();
-  const Vec3<S> pw = pointPosition(d, i, point_body);
+  const Vec3<S> pw = point_position(d, i, point_body);
   for (int j = i; j >= 0; j = m.bodies[j].parent) {
     const Body<S>& b = m.bodies[j];
     const Mat3<S>& R = d.R[j];
@@ -39,10 +39,10 @@ inline void bodyJacobian(const Model<S, MB, MD>& m, const Data<S, MB, MD>& d, in
 
 // 3 x nv Jacobian of the world velocity of a point fixed on body i (body coordinates).
 template <class S, int MB, int MD, class Mat>
-inline void pointJacobian(const Model<S, MB, MD>& m, const Data<S, MB, MD>& d, int i, const Vec3<S>& point_body,
+inline void point_jacobian(const Model<S, MB, MD>& m, const Data<S, MB, MD>& d, int i, const Vec3<S>& point_body,
                           Mat& J) {
   Eigen::Matrix<S, 6, Eigen::Dynamic, 0, 6, MD> Jb(6, J.cols());
-  bodyJacobian(m, d, i, point_body, Jb);
+  body_jacobian(m, d, i, point_body, Jb);
   J = Jb.template bottomRows<3>();
 }
 

@@ -11,10 +11,10 @@ namespace sparsebody::dynamics {
 
 enum class JointType : unsigned char { Free, Spherical, Revolute, Fixed };
 
-constexpr int jointNq(JointType t) {
+constexpr int joint_nq(JointType t) {
   return t == JointType::Free ? 7 : t == JointType::Spherical ? 4 : t == JointType::Revolute ? 1 : 0;
 }
-constexpr int jointNv(JointType t) {
+constexpr int joint_nv(JointType t) {
   return t == JointType::Free ? 6 : t == JointType::Spherical ? 3 : t == JointType::Revolute ? 1 : 0;
 }
 inline const char* jointName(JointType t) {

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "model.hpp"
+#include "sparsebody/dynamics/model.hpp"
 
 namespace sparsebody::dynamics {
 
@@ -26,7 +26,7 @@ struct MjcfOptions {
 
 namespace detail {
 template <class V>
-std::string mjVec(const V& v) {
+std::string mjcf_vec(const V& v) {
   std::ostringstream s;
   s << std::setprecision(17);
   for (int i = 0; i < v.size(); ++i) s << (i ? " " : "") << double(v(i));
@@ -35,32 +35,32 @@ std::string mjVec(const V& v) {
 }  // namespace detail
 
 template <class S, int MB, int MD>
-inline std::string toMjcf(const Model<S, MB, MD>& m, const MjcfOptions& o = MjcfOptions{}) {
-  using detail::mjVec;
+inline std::string to_mjcf(const Model<S, MB, MD>& m, const MjcfOptions& o = MjcfOptions{}) {
+  using detail::mjcf_vec;
   std::ostringstream x;
   x << std::setprecision(17);
   x << "<mujoco model=\"" << m.name << "\">\n";
   x << "  <compiler angle=\"radian\" inertiafromgeom=\"false\" autolimits=\"true\"/>\n";
-  x << "  <option timestep=\"" << o.timestep << "\" integrator=\"Euler\" gravity=\"" << mjVec(m.gravity) << "\">\n";
+  x << "  <option timestep=\"" << o.timestep << "\" integrator=\"Euler\" gravity=\"" << mjcf_vec(m.gravity) << "\">\n";
   if (!o.contact) x << "    <flag contact=\"disable\"/>\n";
   x << "  </option>\n  <worldbody>\n";
   if (o.floor) {
     Vec3<double> up = -m.gravity.template cast<double>();
     if (up.norm() == 0) up = Vec3<double>::UnitY();
     up.normalize();
-    x << "    <geom name=\"floor\" type=\"plane\" size=\"0 0 1\" zaxis=\"" << mjVec(up)
+    x << "    <geom name=\"floor\" type=\"plane\" size=\"0 0 1\" zaxis=\"" << mjcf_vec(up)
       << "\" contype=\"0\" conaffinity=\"1\" friction=\"" << o.friction << " 0.005 0.0001\"/>\n";
   }
   std::vector<std::vector<int>> children(m.nb);
   std::vector<int> roots;
   for (int i = 0; i < m.nb; ++i) (m.bodies[i].parent < 0 ? roots : children[m.bodies[i].parent]).push_back(i);
-  auto writeBody = [&](auto&& self, int i, int depth) -> void {
+  auto write_body = [&](auto&& self, int i, int depth) -> void {
     const Body<S>& b = m.bodies[i];
     const std::string ind(2 * depth + 4, ' ');
     const Eigen::Vector4d q(double(b.rot.w()), double(b.rot.x()), double(b.rot.y()), double(b.rot.z()));
-    x << ind << "<body name=\"" << m.names[i] << "\" pos=\"" << mjVec(b.pos) << "\" quat=\"" << mjVec(q) << "\">\n";
+    x << ind << "<body name=\"" << m.names[i] << "\" pos=\"" << mjcf_vec(b.pos) << "\" quat=\"" << mjcf_vec(q) << "\">\n";
     const Mat3<S>& I = b.inertia;
-    x << ind << "  <inertial pos=\"" << mjVec(b.com) << "\" mass=\"" << double(b.mass) << "\" fullinertia=\""
+    x << ind << "  <inertial pos=\"" << mjcf_vec(b.com) << "\" mass=\"" << double(b.mass) << "\" fullinertia=\""
       << double(I(0, 0)) << " " << double(I(1, 1)) << " " << double(I(2, 2)) << " " << double(I(0, 1)) << " "
       << double(I(0, 2)) << " " << double(I(1, 2)) << "\"/>\n";
     const double damp = double(b.damping) + (o.servo_damping ? double(b.kd) : 0.0);
@@ -70,7 +70,7 @@ inline std::string toMjcf(const Model<S, MB, MD>& m, const MjcfOptions& o = Mjcf
         x << ind << "  <joint name=\"" << m.names[i] << "\" type=\"ball\" damping=\"" << damp << "\"/>\n";
         break;
       case JointType::Revolute:
-        x << ind << "  <joint name=\"" << m.names[i] << "\" type=\"hinge\" axis=\"" << mjVec(b.axis) << "\" damping=\""
+        x << ind << "  <joint name=\"" << m.names[i] << "\" type=\"hinge\" axis=\"" << mjcf_vec(b.axis) << "\" damping=\""
           << damp << "\"";
         if (o.limits && b.limited) x << " range=\"" << double(b.lower) << " " << double(b.upper) << "\"";
         x << "/>\n";
@@ -81,13 +81,13 @@ inline std::string toMjcf(const Model<S, MB, MD>& m, const MjcfOptions& o = Mjcf
       const Shape<S>& s = b.shapes[k];
       x << ind << "  <geom contype=\"1\" conaffinity=\"0\" ";
       switch (s.type) {
-        case Shape<S>::Type::Sphere: x << "type=\"sphere\" pos=\"" << mjVec(s.pos) << "\" size=\"" << double(s.radius) << "\""; break;
+        case Shape<S>::Type::Sphere: x << "type=\"sphere\" pos=\"" << mjcf_vec(s.pos) << "\" size=\"" << double(s.radius) << "\""; break;
         case Shape<S>::Type::Capsule:
-          x << "type=\"capsule\" fromto=\"" << mjVec(s.pos) << " " << mjVec(s.pos2) << "\" size=\"" << double(s.radius) << "\"";
+          x << "type=\"capsule\" fromto=\"" << mjcf_vec(s.pos) << " " << mjcf_vec(s.pos2) << "\" size=\"" << double(s.radius) << "\"";
           break;
         case Shape<S>::Type::Box: {
           const Eigen::Vector4d bq(double(s.rot.w()), double(s.rot.x()), double(s.rot.y()), double(s.rot.z()));
-          x << "type=\"box\" pos=\"" << mjVec(s.pos) << "\" quat=\"" << mjVec(bq) << "\" size=\"" << mjVec(s.half) << "\"";
+          x << "type=\"box\" pos=\"" << mjcf_vec(s.pos) << "\" quat=\"" << mjcf_vec(bq) << "\" size=\"" << mjcf_vec(s.half) << "\"";
           break;
         }
       }
@@ -96,7 +96,7 @@ inline std::string toMjcf(const Model<S, MB, MD>& m, const MjcfOptions& o = Mjcf
     for (int c : children[i]) self(self, c, depth + 1);
     x << ind << "</body>\n";
   };
-  for (int r : roots) writeBody(writeBody, r, 0);
+  for (int r : roots) write_body(write_body, r, 0);
   x << "  </worldbody>\n</mujoco>\n";
   return x.str();
 }

@@ -5,8 +5,8 @@
 #include <array>
 #include <string>
 
-#include "joint.hpp"
-#include "spatial.hpp"
+#include "sparsebody/dynamics/joint.hpp"
+#include "sparsebody/dynamics/spatial.hpp"
 
 namespace sparsebody::dynamics {
 
@@ -77,8 +77,8 @@ struct Model {
   int num_points = 0;
 
   // Appends a body; returns its index or -1 when a compile-time bound would be exceeded.
-  int addBody(const std::string& body_name, const Body<S>& b) {
-    if (nb >= MaxBodies || nv + jointNv(b.joint) > MaxDofs) return -1;
+  int add_body(const std::string& body_name, const Body<S>& b) {
+    if (nb >= MaxBodies || nv + joint_nv(b.joint) > MaxDofs) return -1;
     names[nb] = body_name;
     bodies[nb] = b;
     ++nb;
@@ -90,9 +90,9 @@ struct Model {
       if (names[i] == body_name) return i;
     return -1;
   }
-  int nvOf(int i) const { return jointNv(bodies[i].joint); }
-  int nqOf(int i) const { return jointNq(bodies[i].joint); }
-  S totalMass() const {
+  int nv_of(int i) const { return joint_nv(bodies[i].joint); }
+  int nq_of(int i) const { return joint_nq(bodies[i].joint); }
+  S total_mass() const {
     S m = 0;
     for (int i = 0; i < nb; ++i) m += bodies[i].mass;
     return m;
@@ -106,19 +106,19 @@ struct Model {
       Body<S>& b = bodies[i];
       b.q_index = nq;
       b.v_index = nv;
-      nq += jointNq(b.joint);
-      nv += jointNv(b.joint);
-      b.I = rigidInertia(b.mass, b.com, b.inertia);
+      nq += joint_nq(b.joint);
+      nv += joint_nv(b.joint);
+      b.I = rigid_inertia(b.mass, b.com, b.inertia);
       b.XT.E = b.rot.normalized().toRotationMatrix().transpose();
       b.XT.r = b.pos;
       b.XT_identity = (b.XT.E - Mat3<S>::Identity()).cwiseAbs().maxCoeff() == S(0);
       if (b.joint == JointType::Revolute) b.axis.normalize();
-      for (int s = 0; s < b.num_shapes; ++s) addPoints(i, b.shapes[s]);
+      for (int s = 0; s < b.num_shapes; ++s) add_points(i, b.shapes[s]);
     }
   }
 
   // Zero-velocity state at the reference configuration (identity rotations, zero angles).
-  VecQ neutralConfiguration() const {
+  VecQ neutral_configuration() const {
     VecQ q = VecQ::Zero(nq);
     for (int i = 0; i < nb; ++i) {
       const Body<S>& b = bodies[i];
@@ -162,20 +162,20 @@ struct Model {
   }
 
  private:
-  void addPoint(int body, const Vec3<S>& p, S r) {
+  void add_point(int body, const Vec3<S>& p, S r) {
     if (num_points >= kMaxPoints) return;
     points[num_points++] = ContactPoint<S>{body, p, r};
   }
-  void addPoints(int body, const Shape<S>& s) {
+  void add_points(int body, const Shape<S>& s) {
     switch (s.type) {
-      case Shape<S>::Type::Sphere: addPoint(body, s.pos, s.radius); break;
-      case Shape<S>::Type::Capsule: addPoint(body, s.pos, s.radius); addPoint(body, s.pos2, s.radius); break;
+      case Shape<S>::Type::Sphere: add_point(body, s.pos, s.radius); break;
+      case Shape<S>::Type::Capsule: add_point(body, s.pos, s.radius); add_point(body, s.pos2, s.radius); break;
       case Shape<S>::Type::Box: {
         const Mat3<S> R = s.rot.normalized().toRotationMatrix();
         for (int k = 0; k < 8; ++k) {
           const Vec3<S> c((k & 1) ? s.half.x() : -s.half.x(), (k & 2) ? s.half.y() : -s.half.y(),
                           (k & 4) ? s.half.z() : -s.half.z());
-          addPoint(body, s.pos + R * c, S(0));
+          add_point(body, s.pos + R * c, S(0));
         }
         break;
       }

@@ -26,8 +26,8 @@
 #include <sstream>
 #include <string>
 
-#include "../core/error.hpp"
-#include "model.hpp"
+#include "sparsebody/core/error.hpp"
+#include "sparsebody/dynamics/model.hpp"
 
 namespace sparsebody::dynamics {
 
@@ -41,7 +41,7 @@ struct JsonCtx {
   }
 };
 
-inline double jsonNumber(const JsonCtx& c, const nlohmann::json& o, const char* key, double def, bool required,
+inline double json_number(const JsonCtx& c, const nlohmann::json& o, const char* key, double def, bool required,
                          bool non_negative = false) {
   if (!o.contains(key)) {
     if (required) c.fail(key, "missing (expected a number)");
@@ -56,7 +56,7 @@ inline double jsonNumber(const JsonCtx& c, const nlohmann::json& o, const char* 
 }
 
 template <int N>
-Eigen::Matrix<double, N, 1> jsonVec(const JsonCtx& c, const nlohmann::json& o, const char* key,
+Eigen::Matrix<double, N, 1> json_vec(const JsonCtx& c, const nlohmann::json& o, const char* key,
                                     const Eigen::Matrix<double, N, 1>& def, bool required) {
   if (!o.contains(key)) {
     if (required) c.fail(key, "missing (expected an array of " + std::to_string(N) + " numbers)");
@@ -73,13 +73,13 @@ Eigen::Matrix<double, N, 1> jsonVec(const JsonCtx& c, const nlohmann::json& o, c
   return r;
 }
 
-inline Eigen::Quaterniond jsonQuat(const JsonCtx& c, const nlohmann::json& o, const char* key) {
-  const Eigen::Vector4d q = jsonVec<4>(c, o, key, Eigen::Vector4d(1, 0, 0, 0), false);
+inline Eigen::Quaterniond json_quat(const JsonCtx& c, const nlohmann::json& o, const char* key) {
+  const Eigen::Vector4d q = json_vec<4>(c, o, key, Eigen::Vector4d(1, 0, 0, 0), false);
   if (q.norm() < 1e-9) c.fail(key, "expected a non-zero quaternion [w, x, y, z]");
   return Eigen::Quaterniond(q(0), q(1), q(2), q(3)).normalized();
 }
 
-inline void checkKeys(const JsonCtx& c, const nlohmann::json& o, const std::set<std::string>& allowed) {
+inline void check_keys(const JsonCtx& c, const nlohmann::json& o, const std::set<std::string>& allowed) {
   for (auto it = o.begin(); it != o.end(); ++it)
     if (!allowed.count(it.key())) {
       std::string list;
@@ -92,7 +92,7 @@ inline void checkKeys(const JsonCtx& c, const nlohmann::json& o, const std::set<
 
 // Parses and validates a model; `source` names the document in errors (usually its path).
 template <class S, int MB, int MD>
-Model<S, MB, MD> parseModelJson(const std::string& text, const std::string& source = "model.json") {
+Model<S, MB, MD> parse_model_json(const std::string& text, const std::string& source = "model.json") {
   using detail::JsonCtx;
   JsonCtx c{source, "document"};
   nlohmann::json j;
@@ -102,13 +102,13 @@ Model<S, MB, MD> parseModelJson(const std::string& text, const std::string& sour
     throw LoadError(source, std::string("invalid JSON: ") + e.what());
   }
   if (!j.is_object()) c.fail("", "expected a JSON object with a 'bodies' array");
-  detail::checkKeys(c, j, {"name", "gravity", "bodies"});
+  detail::check_keys(c, j, {"name", "gravity", "bodies"});
   Model<S, MB, MD> m;
   if (j.contains("name")) {
     if (!j["name"].is_string()) c.fail("name", "expected a string");
     m.name = j["name"].get<std::string>();
   }
-  m.gravity = detail::jsonVec<3>(c, j, "gravity", Eigen::Vector3d(0, -9.81, 0), false).template cast<S>();
+  m.gravity = detail::json_vec<3>(c, j, "gravity", Eigen::Vector3d(0, -9.81, 0), false).template cast<S>();
   if (!j.contains("bodies") || !j["bodies"].is_array() || j["bodies"].empty())
     c.fail("bodies", "expected a non-empty array of bodies");
   const auto& bodies = j["bodies"];
@@ -124,7 +124,7 @@ Model<S, MB, MD> parseModelJson(const std::string& text, const std::string& sour
       bc.fail("name", "missing or not a non-empty string");
     const std::string name = o["name"].get<std::string>();
     bc.where += " '" + name + "'";
-    detail::checkKeys(bc, o, {"name", "parent", "joint", "axis", "pos", "quat", "mass", "com", "inertia", "kp", "kd",
+    detail::check_keys(bc, o, {"name", "parent", "joint", "axis", "pos", "quat", "mass", "com", "inertia", "kp", "kd",
                               "damping", "torque_limit", "limits", "shapes"});
     if (m.find(name) >= 0) bc.fail("name", "duplicate body name");
     Body<S> b;
@@ -148,22 +148,22 @@ Model<S, MB, MD> parseModelJson(const std::string& text, const std::string& sour
     else bc.fail("joint", "'" + jt + "' is not a joint type (expected free, spherical, revolute or fixed)");
     if (b.joint == JointType::Free && b.parent != -1) bc.fail("joint", "a free joint is only allowed on the root body");
     if (b.joint == JointType::Revolute) {
-      const Eigen::Vector3d ax = detail::jsonVec<3>(bc, o, "axis", Eigen::Vector3d::Zero(), true);
+      const Eigen::Vector3d ax = detail::json_vec<3>(bc, o, "axis", Eigen::Vector3d::Zero(), true);
       if (ax.norm() < 1e-9) bc.fail("axis", "expected a non-zero axis");
       b.axis = ax.normalized().template cast<S>();
     } else if (o.contains("axis")) {
       bc.fail("axis", "only revolute joints have an axis");
     }
-    nv += jointNv(b.joint);
+    nv += joint_nv(b.joint);
     if (nv > MD) bc.fail("joint", "total DoF " + std::to_string(nv) + " exceeds this Model's compile-time bound MaxDofs = " + std::to_string(MD));
-    b.pos = detail::jsonVec<3>(bc, o, "pos", Eigen::Vector3d::Zero(), false).template cast<S>();
-    b.rot = detail::jsonQuat(bc, o, "quat").template cast<S>();
+    b.pos = detail::json_vec<3>(bc, o, "pos", Eigen::Vector3d::Zero(), false).template cast<S>();
+    b.rot = detail::json_quat(bc, o, "quat").template cast<S>();
     // inertia
-    const double mass = detail::jsonNumber(bc, o, "mass", 0, true);
+    const double mass = detail::json_number(bc, o, "mass", 0, true);
     if (!(mass > 0)) bc.fail("mass", "expected a positive mass in kg, got " + o["mass"].dump());
     b.mass = S(mass);
-    b.com = detail::jsonVec<3>(bc, o, "com", Eigen::Vector3d::Zero(), false).template cast<S>();
-    const Eigen::Matrix<double, 6, 1> in = detail::jsonVec<6>(bc, o, "inertia", Eigen::Matrix<double, 6, 1>::Zero(), true);
+    b.com = detail::json_vec<3>(bc, o, "com", Eigen::Vector3d::Zero(), false).template cast<S>();
+    const Eigen::Matrix<double, 6, 1> in = detail::json_vec<6>(bc, o, "inertia", Eigen::Matrix<double, 6, 1>::Zero(), true);
     Eigen::Matrix3d I;
     I << in(0), in(3), in(4), in(3), in(1), in(5), in(4), in(5), in(2);
     const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(I).eigenvalues();
@@ -171,12 +171,12 @@ Model<S, MB, MD> parseModelJson(const std::string& text, const std::string& sour
     if (ev(0) + ev(1) < ev(2) * (1 - 1e-9))
       bc.fail("inertia", "principal moments violate the triangle inequality (not a physical rigid body)");
     b.inertia = I.template cast<S>();
-    b.kp = S(detail::jsonNumber(bc, o, "kp", 0, false, true));
-    b.kd = S(detail::jsonNumber(bc, o, "kd", 0, false, true));
-    b.damping = S(detail::jsonNumber(bc, o, "damping", 0, false, true));
-    b.torque_limit = S(detail::jsonNumber(bc, o, "torque_limit", 0, false, true));
+    b.kp = S(detail::json_number(bc, o, "kp", 0, false, true));
+    b.kd = S(detail::json_number(bc, o, "kd", 0, false, true));
+    b.damping = S(detail::json_number(bc, o, "damping", 0, false, true));
+    b.torque_limit = S(detail::json_number(bc, o, "torque_limit", 0, false, true));
     if (o.contains("limits")) {
-      const Eigen::Vector2d l = detail::jsonVec<2>(bc, o, "limits", Eigen::Vector2d::Zero(), true);
+      const Eigen::Vector2d l = detail::json_vec<2>(bc, o, "limits", Eigen::Vector2d::Zero(), true);
       if (l(0) > l(1)) bc.fail("limits", "expected [lower, upper] with lower <= upper");
       b.lower = S(l(0)); b.upper = S(l(1)); b.limited = true;
     }
@@ -192,22 +192,22 @@ Model<S, MB, MD> parseModelJson(const std::string& text, const std::string& sour
         const std::string t = so["type"].get<std::string>();
         Shape<S>& s = b.shapes[b.num_shapes++];
         if (t == "sphere") {
-          detail::checkKeys(sc, so, {"type", "pos", "radius"});
+          detail::check_keys(sc, so, {"type", "pos", "radius"});
           s.type = Shape<S>::Type::Sphere;
-          s.pos = detail::jsonVec<3>(sc, so, "pos", Eigen::Vector3d::Zero(), false).template cast<S>();
-          s.radius = S(detail::jsonNumber(sc, so, "radius", 0, true));
+          s.pos = detail::json_vec<3>(sc, so, "pos", Eigen::Vector3d::Zero(), false).template cast<S>();
+          s.radius = S(detail::json_number(sc, so, "radius", 0, true));
         } else if (t == "capsule") {
-          detail::checkKeys(sc, so, {"type", "from", "to", "radius"});
+          detail::check_keys(sc, so, {"type", "from", "to", "radius"});
           s.type = Shape<S>::Type::Capsule;
-          s.pos = detail::jsonVec<3>(sc, so, "from", Eigen::Vector3d::Zero(), true).template cast<S>();
-          s.pos2 = detail::jsonVec<3>(sc, so, "to", Eigen::Vector3d::Zero(), true).template cast<S>();
-          s.radius = S(detail::jsonNumber(sc, so, "radius", 0, true));
+          s.pos = detail::json_vec<3>(sc, so, "from", Eigen::Vector3d::Zero(), true).template cast<S>();
+          s.pos2 = detail::json_vec<3>(sc, so, "to", Eigen::Vector3d::Zero(), true).template cast<S>();
+          s.radius = S(detail::json_number(sc, so, "radius", 0, true));
         } else if (t == "box") {
-          detail::checkKeys(sc, so, {"type", "pos", "quat", "half_extents"});
+          detail::check_keys(sc, so, {"type", "pos", "quat", "half_extents"});
           s.type = Shape<S>::Type::Box;
-          s.pos = detail::jsonVec<3>(sc, so, "pos", Eigen::Vector3d::Zero(), false).template cast<S>();
-          s.rot = detail::jsonQuat(sc, so, "quat").template cast<S>();
-          const Eigen::Vector3d h = detail::jsonVec<3>(sc, so, "half_extents", Eigen::Vector3d::Zero(), true);
+          s.pos = detail::json_vec<3>(sc, so, "pos", Eigen::Vector3d::Zero(), false).template cast<S>();
+          s.rot = detail::json_quat(sc, so, "quat").template cast<S>();
+          const Eigen::Vector3d h = detail::json_vec<3>(sc, so, "half_extents", Eigen::Vector3d::Zero(), true);
           if (!(h.minCoeff() > 0)) sc.fail("half_extents", "expected three positive half extents");
           s.half = h.template cast<S>();
           s.radius = S(1);  // unused; passes the radius check below
@@ -218,23 +218,23 @@ Model<S, MB, MD> parseModelJson(const std::string& text, const std::string& sour
         if (s.type == Shape<S>::Type::Box) s.radius = S(0);
       }
     }
-    m.addBody(name, b);
+    m.add_body(name, b);
   }
   return m;
 }
 
 template <class S, int MB, int MD>
-Model<S, MB, MD> loadModelJson(const std::string& path) {
+Model<S, MB, MD> load_model_json(const std::string& path) {
   std::ifstream f(path);
   if (!f) throw LoadError(path, "cannot open file");
   std::stringstream ss;
   ss << f.rdbuf();
-  return parseModelJson<S, MB, MD>(ss.str(), path);
+  return parse_model_json<S, MB, MD>(ss.str(), path);
 }
 
-// Writes a model in the same format (round-trips through parseModelJson).
+// Writes a model in the same format (round-trips through parse_model_json).
 template <class S, int MB, int MD>
-std::string modelToJson(const Model<S, MB, MD>& m, int indent = 1) {
+std::string model_to_json(const Model<S, MB, MD>& m, int indent = 1) {
   using nlohmann::json;
   auto v3 = [](const Vec3<S>& v) { return json::array({double(v.x()), double(v.y()), double(v.z())}); };
   auto q4 = [](const Quat<S>& q) { return json::array({double(q.w()), double(q.x()), double(q.y()), double(q.z())}); };

@@ -6,12 +6,12 @@
 // clamped to torque_limit (vector norm for spherical joints). This is the explicit part; the
 // damping of the next velocity, -h (kd + damping) qdd, is added implicitly inside ABA (D_i).
 #pragma once
-#include "kinematics.hpp"
+#include "sparsebody/dynamics/kinematics.hpp"
 
 namespace sparsebody::dynamics {
 
 template <class S, int MB, int MD>
-inline void pdTorques(const Model<S, MB, MD>& m, const typename Model<S, MB, MD>::VecQ& q,
+inline void pd_torques(const Model<S, MB, MD>& m, const typename Model<S, MB, MD>::VecQ& q,
                       const typename Model<S, MB, MD>::VecV& qd, const typename Model<S, MB, MD>::VecQ& q_target,
                       const typename Model<S, MB, MD>::VecV& qd_target, typename Model<S, MB, MD>::VecV& tau) {
   tau.setZero(m.nv);
@@ -19,8 +19,8 @@ inline void pdTorques(const Model<S, MB, MD>& m, const typename Model<S, MB, MD>
     const Body<S>& b = m.bodies[i];
     switch (b.joint) {
       case JointType::Spherical: {
-        const Quat<S> cur = readQuat<S>(q, b.q_index), tgt = readQuat<S>(q_target, b.q_index);
-        const Vec3<S> e = quatLog(Quat<S>(cur.conjugate() * tgt));
+        const Quat<S> cur = read_quat<S>(q, b.q_index), tgt = read_quat<S>(q_target, b.q_index);
+        const Vec3<S> e = quat_log(Quat<S>(cur.conjugate() * tgt));
         const Vec3<S> w = qd.template segment<3>(b.v_index);
         Vec3<S> t = b.kp * e + b.kd * (Vec3<S>(qd_target.template segment<3>(b.v_index)) - w);
         const S n = t.norm();
@@ -45,12 +45,12 @@ inline void pdTorques(const Model<S, MB, MD>& m, const typename Model<S, MB, MD>
 
 // Passive damping only (torque-driven use): tau = -damping qd.
 template <class S, int MB, int MD>
-inline void passiveTorques(const Model<S, MB, MD>& m, const typename Model<S, MB, MD>::VecV& qd,
+inline void passive_torques(const Model<S, MB, MD>& m, const typename Model<S, MB, MD>::VecV& qd,
                            typename Model<S, MB, MD>::VecV& tau) {
   tau.setZero(m.nv);
   for (int i = 0; i < m.nb; ++i) {
     const Body<S>& b = m.bodies[i];
-    for (int k = 0; k < jointNv(b.joint); ++k) tau(b.v_index + k) = -b.damping * qd(b.v_index + k);
+    for (int k = 0; k < joint_nv(b.joint); ++k) tau(b.v_index + k) = -b.damping * qd(b.v_index + k);
   }
 }
 

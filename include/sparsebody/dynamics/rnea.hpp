@@ -1,13 +1,13 @@
 // Recursive Newton-Euler inverse dynamics (Featherstone Table 5.1):
 //   tau = M(q) qdd + C(q, qd) - J^T f_ext, gravity entering as a fictitious base acceleration a_0 = -g.
 #pragma once
-#include "kinematics.hpp"
+#include "sparsebody/dynamics/kinematics.hpp"
 
 namespace sparsebody::dynamics {
 
 // S_i^T f for body i, written into tau.
 template <class S, int MB, int MD>
-inline void projectForce(const Model<S, MB, MD>& m, int i, const Vec6<S>& f, typename Model<S, MB, MD>::VecV& tau) {
+inline void project_force(const Model<S, MB, MD>& m, int i, const Vec6<S>& f, typename Model<S, MB, MD>::VecV& tau) {
   const Body<S>& b = m.bodies[i];
   switch (b.joint) {
     case JointType::Free: tau.template segment<6>(b.v_index) = f; break;
@@ -22,22 +22,22 @@ template <class S, int MB, int MD>
 inline void rnea(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecQ& q,
                  const typename Model<S, MB, MD>::VecV& qd, const typename Model<S, MB, MD>::VecV& qdd,
                  typename Model<S, MB, MD>::VecV& tau) {
-  forwardKinematics(m, d, q, &qd, false);
+  forward_kinematics(m, d, q, &qd, false);
   Vec6<S> a0 = Vec6<S>::Zero();
   a0.template tail<3>() = -m.gravity;
   for (int i = 0; i < m.nb; ++i) {
     const int pi = m.bodies[i].parent;
     // a_i = X_i a_lambda + S_i qdd_i + c_i
-    d.a[i] = d.X[i].apply(pi < 0 ? a0 : d.a[pi]) + jointVelocity(m, i, qdd) + d.c[i];
+    d.a[i] = d.X[i].apply(pi < 0 ? a0 : d.a[pi]) + joint_velocity(m, i, qdd) + d.c[i];
     const Mat6<S>& I = m.bodies[i].I;
-    d.f[i] = mul6v(I, d.a[i]) + crossForce(d.v[i], mul6v(I, d.v[i]));
+    d.f[i] = mul6v(I, d.a[i]) + cross_force(d.v[i], mul6v(I, d.v[i]));
     if (d.has_ext) d.f[i] -= d.fext[i];
   }
   tau.resize(m.nv);
   for (int i = m.nb - 1; i >= 0; --i) {
-    projectForce(m, i, d.f[i], tau);
+    project_force(m, i, d.f[i], tau);
     const int pi = m.bodies[i].parent;
-    if (pi >= 0) d.f[pi] += d.X[i].applyTransposeForce(d.f[i]);
+    if (pi >= 0) d.f[pi] += d.X[i].apply_transpose_force(d.f[i]);
   }
 }
 

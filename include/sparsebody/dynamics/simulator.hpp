@@ -8,17 +8,17 @@
 //
 // Recovery: step() checks its input and its result. Non-finite numbers, or any |v_k| above
 // `velocity_limit`, make it restore the pre-step state and return the failure status; nothing is
-// propagated. The caller decides what to do (typically setState() with a fresh pose and zero
+// propagated. The caller decides what to do (typically set_state() with a fresh pose and zero
 // velocity, as Neural3Points' rollouts reset the character).
 #pragma once
 #include <algorithm>
 #include <limits>
 #include <ostream>
 
-#include "aba.hpp"
-#include "contact.hpp"
-#include "integrator.hpp"
-#include "pd_servo.hpp"
+#include "sparsebody/dynamics/aba.hpp"
+#include "sparsebody/dynamics/contact.hpp"
+#include "sparsebody/dynamics/integrator.hpp"
+#include "sparsebody/dynamics/pd_servo.hpp"
 
 namespace sparsebody::dynamics {
 
@@ -29,7 +29,7 @@ enum class StepStatus : unsigned char {
   VelocityLimit,     // |v_k| > velocity_limit after the step; rolled back
   SolverFailure,     // a joint-space inertia term was not positive definite; rolled back
 };
-inline const char* statusName(StepStatus s) {
+inline const char* status_name(StepStatus s) {
   switch (s) {
     case StepStatus::Ok: return "ok";
     case StepStatus::NonFiniteInput: return "non-finite input";
@@ -39,10 +39,10 @@ inline const char* statusName(StepStatus s) {
   }
 }
 
-inline std::ostream& operator<<(std::ostream& os, StepStatus s) { return os << statusName(s); }
+inline std::ostream& operator<<(std::ostream& os, StepStatus s) { return os << status_name(s); }
 
 // PD servo on the free root toward the root entries of targets() (position p*, orientation R*) and
-// targetVelocities() (angular w*, linear v*, in the target's body frame: the layout of v), in the
+// target_velocities() (angular w*, linear v*, in the target's body frame: the layout of v), in the
 // world frame:
 //   F = clamp(kp_v (p* - p) + kd_v (R* v* - v+), max_force),  N = clamp(kp_w log(R* R^T) + kd_w (R* w* - w+), max_torque)
 // with the damping evaluated at the next velocity (v+, w+) implicitly inside ABA (D_root = I^A + h K_r,
@@ -51,7 +51,7 @@ inline std::ostream& operator<<(std::ostream& os, StepStatus s) { return os << s
 // already exceeds its bound is applied as that bounded force alone (no implicit part); a block
 // whose implicit part -h kd a takes it past the bound is re-solved that way (one more ABA solve on
 // such steps), so the applied wrench never exceeds the bounds. The step reports the wrench it
-// applied: rootServoForce() / rootServoTorque(). Used by Neural3Points' default controller as the
+// applied: root_servo_force() / root_servo_torque(). Used by Neural3Points' default controller as the
 // residual wrench ("hand of God") that keeps the character balanced.
 template <class S>
 struct RootServo {
@@ -87,7 +87,7 @@ class Simulator {
   explicit Simulator(const ModelT& model) : m_(model), d_(model) {
     for (int i = 0; i < m_.nb; ++i)
       if (m_.bodies[i].joint == JointType::Free) root_ = i;
-    q_ = m_.neutralConfiguration();
+    q_ = m_.neutral_configuration();
     v_.setZero(m_.nv);
     q_target_ = q_;
     v_target_.setZero(m_.nv);
@@ -97,43 +97,43 @@ class Simulator {
     q_prev_ = q_;
     v_prev_ = v_;
     env.ground_normal = -m_.gravity.normalized();
-    refreshKinematics();
+    refresh_kinematics();
   }
 
   const ModelT& model() const { return m_; }
   const Data<S, MB, MD>& data() const { return d_; }
   const VecQ& q() const { return q_; }
   const VecV& v() const { return v_; }
-  const VecV& lastAcceleration() const { return qdd_; }
-  void setState(const VecQ& q, const VecV& v) {
+  const VecV& last_acceleration() const { return qdd_; }
+  void set_state(const VecQ& q, const VecV& v) {
     q_ = q;
     v_ = v;
-    refreshKinematics();
+    refresh_kinematics();
   }
   // PD targets in the configuration layout (quaternions for spherical joints, angles for revolute).
   VecQ& targets() { return q_target_; }
-  VecV& targetVelocities() { return v_target_; }
+  VecV& target_velocities() { return v_target_; }
   // Generalised torques added in both modes (free root entries: body-frame wrench).
   VecV& torques() { return tau_user_; }
   // Convenience: target of one spherical joint (joint-frame rotation, child relative to parent).
-  void setTarget(int body, const Quat<S>& rot) {
+  void set_target(int body, const Quat<S>& rot) {
     const int k = m_.bodies[body].q_index;
     q_target_(k) = rot.w(); q_target_(k + 1) = rot.x(); q_target_(k + 2) = rot.y(); q_target_(k + 3) = rot.z();
   }
-  void setTarget(int body, S angle) { q_target_(m_.bodies[body].q_index) = angle; }
+  void set_target(int body, S angle) { q_target_(m_.bodies[body].q_index) = angle; }
 
-  int numContacts() const { return nc_; }
-  int numActiveContacts() const {
+  int num_contacts() const { return nc_; }
+  int num_active_contacts() const {
     int n = 0;
     for (int k = 0; k < nc_; ++k) n += contacts()[k].active ? 1 : 0;
     return n;
   }
-  const Contact<S>& contactAt(int k) const { return contacts()[k]; }
-  int contactOverflow() const { return overflow_; }
-  int lastPasses() const { return passes_; }
+  const Contact<S>& contact_at(int k) const { return contacts()[k]; }
+  int contact_overflow() const { return overflow_; }
+  int last_passes() const { return passes_; }
   // World-frame wrench the root servo applied in the last step (explicit + implicit part; zero when off).
-  const Vec3<S>& rootServoForce() const { return root_force_; }
-  const Vec3<S>& rootServoTorque() const { return root_torque_; }
+  const Vec3<S>& root_servo_force() const { return root_force_; }
+  const Vec3<S>& root_servo_torque() const { return root_torque_; }
 
   StepStatus step(S h) {
     const bool servo_root = root_servo.enabled && root_ >= 0;
@@ -142,23 +142,23 @@ class Simulator {
       return StepStatus::NonFiniteInput;
     q_prev_ = q_;
     v_prev_ = v_;
-    // Kinematics of the current state are already in d_ (from the previous step or setState).
-    for (int i = 0; i < m_.nb; ++i) d_.bias[i] = crossForce(d_.v[i], mul6v(m_.bodies[i].I, d_.v[i]));
-    if (mode == ControlMode::PdTargets) pdTorques(m_, q_, v_, q_target_, v_target_, tau_);
-    else passiveTorques(m_, v_, tau_);
+    // Kinematics of the current state are already in d_ (from the previous step or set_state).
+    for (int i = 0; i < m_.nb; ++i) d_.bias[i] = cross_force(d_.v[i], mul6v(m_.bodies[i].I, d_.v[i]));
+    if (mode == ControlMode::PdTargets) pd_torques(m_, q_, v_, q_target_, v_target_, tau_);
+    else passive_torques(m_, v_, tau_);
     tau_ += tau_user_;
     root_force_.setZero();
     root_torque_.setZero();
-    if (servo_root) rootServoExplicit();
+    if (servo_root) root_servo_explicit();
     const Vec6<S>* root_k = servo_root ? &root_k_ : nullptr;
     const S hd = implicit_damping ? h : S(0);
     const bool with_kd = mode == ControlMode::PdTargets;
     if (contacts_enabled) {
       // Two buffers, flipped: the previous step's contacts stay readable for the warm start (see
-      // detectContacts) without copying them.
+      // detect_contacts) without copying them.
       const int prev = current_;
       current_ ^= 1;
-      nc_ = detectContacts(m_, d_, env, contact, contacts(), overflow_, contact_buffers_[prev].data(),
+      nc_ = detect_contacts(m_, d_, env, contact, contacts(), overflow_, contact_buffers_[prev].data(),
                            warm_start_contacts ? nc_ : 0);
     } else {
       nc_ = 0;
@@ -169,24 +169,24 @@ class Simulator {
     // alone (same contact assembly: one more ABA solve, only on such steps; at most two, as the
     // re-solve of one block changes the other's implicit part).
     auto bound_root_servo = [&] {
-      for (int k = 0; k < 2 && ok && servo_root && rootServoOverBound(hd); ++k) {
-        ok = abaSolve(m_, d_, tau_, qdd_, hd, with_kd, root_k);
+      for (int k = 0; k < 2 && ok && servo_root && root_servo_over_bound(hd); ++k) {
+        ok = aba_solve(m_, d_, tau_, qdd_, hd, with_kd, root_k);
         ++passes_;
       }
     };
     if (nc_ == 0) {
       d_.has_ext = false;
-      ok = abaSolve(m_, d_, tau_, qdd_, hd, with_kd, root_k);
+      ok = aba_solve(m_, d_, tau_, qdd_, hd, with_kd, root_k);
       passes_ = 1;
       bound_root_servo();
     } else {
       const int max_passes = std::max(1, contact.max_passes);  // at least the one solve a step needs
       for (int pass = 0; pass < max_passes; ++pass) {
-        assembleContacts(m_, d_, contacts(), nc_, contact, h);
-        ok = abaSolve(m_, d_, tau_, qdd_, hd, with_kd, root_k);
+        assemble_contacts(m_, d_, contacts(), nc_, contact, h);
+        ok = aba_solve(m_, d_, tau_, qdd_, hd, with_kd, root_k);
         ++passes_;
         if (!ok) break;
-        if (!updateContactSet(m_, d_, contacts(), nc_, contact, h)) break;
+        if (!update_contact_set(m_, d_, contacts(), nc_, contact, h)) break;
       }
       bound_root_servo();
       d_.has_ext = false;
@@ -202,24 +202,24 @@ class Simulator {
     integrate(m_, q_, v_, qdd_, h);
     if (!q_.allFinite() || !v_.allFinite()) return rollback(StepStatus::NonFiniteResult);
     if (v_.cwiseAbs().maxCoeff() > velocity_limit) return rollback(StepStatus::VelocityLimit);
-    forwardKinematics(m_, d_, q_, &v_);
+    forward_kinematics(m_, d_, q_, &v_);
     return StepStatus::Ok;
   }
 
  private:
-  void refreshKinematics() { forwardKinematics(m_, d_, q_, &v_); }
+  void refresh_kinematics() { forward_kinematics(m_, d_, q_, &v_); }
 
   // The root servo's explicit part (root_w_, body frame), added to tau_, and its implicit gains K_r.
-  void rootServoExplicit() {
+  void root_servo_explicit() {
     const Body<S>& b = m_.bodies[root_];
     const RootServo<S>& c = root_servo;
     const Mat3<S>& R = d_.R[root_];
-    const Quat<S> Rt = readQuat<S>(q_target_, b.q_index + 3).normalized();
+    const Quat<S> Rt = read_quat<S>(q_target_, b.q_index + 3).normalized();
     const Vec3<S> wt = Rt * Vec3<S>(v_target_.template segment<3>(b.v_index));
     const Vec3<S> vt = Rt * Vec3<S>(v_target_.template segment<3>(b.v_index + 3));
     const Vec3<S> w = R * Vec3<S>(v_.template segment<3>(b.v_index)), v = R * Vec3<S>(v_.template segment<3>(b.v_index + 3));
     Vec3<S> F = c.kp_linear * (Vec3<S>(q_target_.template segment<3>(b.q_index)) - d_.p[root_]) + c.kd_linear * (vt - v);
-    Vec3<S> N = c.kp_angular * quatLog(Quat<S>(Rt * Quat<S>(R).conjugate())) + c.kd_angular * (wt - w);
+    Vec3<S> N = c.kp_angular * quat_log(Quat<S>(Rt * Quat<S>(R).conjugate())) + c.kd_angular * (wt - w);
     // Saturated block: the bounded force alone (its implicit damping would add to the bound).
     const S nf = F.norm(), nn = N.norm();
     const S max_f = std::max(c.max_force, S(0)), max_n = std::max(c.max_torque, S(0));
@@ -236,7 +236,7 @@ class Simulator {
   // After a solve: the applied root wrench root_w_ - h K_r qdd per block (torque, force); a block
   // over its bound becomes that bound in the applied direction, explicit (K_r block 0). True when
   // something changed (the caller re-solves).
-  bool rootServoOverBound(S hd) {
+  bool root_servo_over_bound(S hd) {
     const int k = m_.bodies[root_].v_index;
     bool changed = false;
     for (int blk = 0; blk < 2; ++blk) {
@@ -259,7 +259,7 @@ class Simulator {
     q_ = q_prev_;
     v_ = v_prev_;
     d_.has_ext = false;
-    refreshKinematics();
+    refresh_kinematics();
     return s;
   }
 

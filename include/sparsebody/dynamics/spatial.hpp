@@ -56,7 +56,7 @@ struct Transform {
     return out;
   }
   // m_A = X^-1 m_B (motion vectors, child to parent).
-  Vec6<S> applyInverse(const Vec6<S>& m) const {
+  Vec6<S> apply_inverse(const Vec6<S>& m) const {
     Vec6<S> out;
     for (int k = 0; k < 3; ++k) {
       out(k) = E(0, k) * m(0) + E(1, k) * m(1) + E(2, k) * m(2);
@@ -68,7 +68,7 @@ struct Transform {
     return out;
   }
   // f_A = X^T f_B: a force on the child expressed in the parent (X^* inverse = X^T).
-  Vec6<S> applyTransposeForce(const Vec6<S>& f) const {
+  Vec6<S> apply_transpose_force(const Vec6<S>& f) const {
     Vec6<S> out;
     for (int k = 0; k < 3; ++k) {
       out(k) = E(0, k) * f(0) + E(1, k) * f(1) + E(2, k) * f(2);
@@ -109,7 +109,7 @@ inline Mat3<S> mul33(const Mat3<S>& A, const Mat3<S>& B) {  // A B
   return C;
 }
 template <class S>
-inline Mat3<S> mulT33(const Mat3<S>& A, const Mat3<S>& B) {  // A^T B
+inline Mat3<S> mul_t33(const Mat3<S>& A, const Mat3<S>& B) {  // A^T B
   Mat3<S> C;
   for (int j = 0; j < 3; ++j)
     for (int i = 0; i < 3; ++i) C(i, j) = A(0, i) * B(0, j) + A(1, i) * B(1, j) + A(2, i) * B(2, j);
@@ -126,7 +126,7 @@ inline Vec6<S> mul6v(const Mat6<S>& A, const Vec6<S>& x) {
 
 // Inverse of a symmetric 3x3 matrix by cofactors (D_i of a spherical joint is SPD).
 template <class S>
-inline Mat3<S> inverseSym3(const Mat3<S>& D) {
+inline Mat3<S> inverse_sym3(const Mat3<S>& D) {
   const S a = D(0, 0), b = D(1, 0), c = D(2, 0), e = D(1, 1), f = D(2, 1), g = D(2, 2);
   const S A = e * g - f * f, B = c * f - b * g, C = b * f - c * e;
   const S inv = S(1) / (a * A + b * B + c * C);
@@ -140,7 +140,7 @@ inline Mat3<S> inverseSym3(const Mat3<S>& D) {
 // Cholesky factor L (lower triangle written, L L^T = A) of a symmetric 6x6 matrix, unrolled.
 // Returns false when a pivot is not positive (same criterion as Eigen::LLT's NumericalIssue).
 template <class S>
-inline bool choleskyFactor6(const Mat6<S>& A, Mat6<S>& L) noexcept {
+inline bool cholesky_factor6(const Mat6<S>& A, Mat6<S>& L) noexcept {
   for (int j = 0; j < 6; ++j) {
     S djj = A(j, j);
     for (int k = 0; k < j; ++k) djj -= L(j, k) * L(j, k);
@@ -158,7 +158,7 @@ inline bool choleskyFactor6(const Mat6<S>& A, Mat6<S>& L) noexcept {
 }
 // Solves (L L^T) x = b in place.
 template <class S>
-inline void choleskySolve6(const Mat6<S>& L, Vec6<S>& x) noexcept {
+inline void cholesky_solve6(const Mat6<S>& L, Vec6<S>& x) noexcept {
   for (int i = 0; i < 6; ++i) {
     S s = x(i);
     for (int k = 0; k < i; ++k) s -= L(i, k) * x(k);
@@ -173,7 +173,7 @@ inline void choleskySolve6(const Mat6<S>& L, Vec6<S>& x) noexcept {
 
 // r^ M (cross product of r with each column of M).
 template <class S>
-inline Mat3<S> crossMat(const Vec3<S>& r, const Mat3<S>& M) {
+inline Mat3<S> cross_mat(const Vec3<S>& r, const Mat3<S>& M) {
   Mat3<S> C;
   for (int j = 0; j < 3; ++j) {
     C(0, j) = r.y() * M(2, j) - r.z() * M(1, j);
@@ -188,7 +188,7 @@ inline Mat3<S> crossMat(const Vec3<S>& r, const Mat3<S>& M) {
 // nothing is copied into temporaries of Eigen type (this is ABA's hottest kernel: ~190 multiplies
 // instead of the ~220 of the block products, and no calls or block copies).
 template <class S>
-inline void addTransformedInertia(const Transform<S>& X, const Mat6<S>& I, Mat6<S>& out) noexcept {
+inline void add_transformed_inertia(const Transform<S>& X, const Mat6<S>& I, Mat6<S>& out) noexcept {
   const Mat3<S>& E = X.E;
   const S rx = X.r.x(), ry = X.r.y(), rz = X.r.z();
   S AE[3][3], BE[3][3], CE[3][3];  // A E, B E, C E
@@ -239,7 +239,7 @@ inline void addTransformedInertia(const Transform<S>& X, const Mat6<S>& I, Mat6<
 
 // Spatial cross products: v x m (motion) and v x* f (force), Featherstone eq. 2.31-2.32.
 template <class S>
-inline Vec6<S> crossMotion(const Vec6<S>& v, const Vec6<S>& m) {
+inline Vec6<S> cross_motion(const Vec6<S>& v, const Vec6<S>& m) {
   const Vec3<S> w = v.template head<3>(), vo = v.template tail<3>();
   const Vec3<S> mw = m.template head<3>(), mv = m.template tail<3>();
   Vec6<S> out;
@@ -248,7 +248,7 @@ inline Vec6<S> crossMotion(const Vec6<S>& v, const Vec6<S>& m) {
   return out;
 }
 template <class S>
-inline Vec6<S> crossForce(const Vec6<S>& v, const Vec6<S>& f) {
+inline Vec6<S> cross_force(const Vec6<S>& v, const Vec6<S>& f) {
   const Vec3<S> w = v.template head<3>(), vo = v.template tail<3>();
   const Vec3<S> fn = f.template head<3>(), ff = f.template tail<3>();
   Vec6<S> out;
@@ -260,7 +260,7 @@ inline Vec6<S> crossForce(const Vec6<S>& v, const Vec6<S>& f) {
 // Rigid-body spatial inertia about the body origin from mass m, centre of mass c and the
 // rotational inertia Ic about c (all in body coordinates): I = [Ic - m c^c^, m c^; -m c^, m 1].
 template <class S>
-inline Mat6<S> rigidInertia(S m, const Vec3<S>& c, const Mat3<S>& Ic) {
+inline Mat6<S> rigid_inertia(S m, const Vec3<S>& c, const Mat3<S>& Ic) {
   const Mat3<S> cx = skew(c);
   Mat6<S> I;
   I.template topLeftCorner<3, 3>() = Ic - m * cx * cx;
@@ -273,7 +273,7 @@ inline Mat6<S> rigidInertia(S m, const Vec3<S>& c, const Mat3<S>& Ic) {
 // E = R(q)^T for a quaternion (w, x, y, z) of any non-zero norm (scaled by 2 / |q|^2, so a slightly
 // unnormalised state never shears the rotation and no sqrt is needed).
 template <class S>
-inline void quatToTransposedRotation(S w, S x, S y, S z, Mat3<S>& E) {
+inline void quat_to_transposed_rotation(S w, S x, S y, S z, Mat3<S>& E) {
   const S s = S(2) / (w * w + x * x + y * y + z * z);
   const S xx = s * x * x, yy = s * y * y, zz = s * z * z;
   const S xy = s * x * y, xz = s * x * z, yz = s * y * z;
@@ -285,7 +285,7 @@ inline void quatToTransposedRotation(S w, S x, S y, S z, Mat3<S>& E) {
 
 // Quaternion exponential map: rotation by the rotation vector w (angle |w|), exact for all |w|.
 template <class S>
-inline Quat<S> quatExp(const Vec3<S>& w) {
+inline Quat<S> quat_exp(const Vec3<S>& w) {
   const S th = w.norm();
   const S half = S(0.5) * th;
   // sin(half)/th with a Taylor series near 0 so tiny rotations stay exact.
@@ -294,7 +294,7 @@ inline Quat<S> quatExp(const Vec3<S>& w) {
 }
 // Logarithm: the rotation vector of q, taking the short way (|angle| <= pi).
 template <class S>
-inline Vec3<S> quatLog(Quat<S> q) {
+inline Vec3<S> quat_log(Quat<S> q) {
   if (q.w() < S(0)) q.coeffs() = -q.coeffs();
   const Vec3<S> v = q.vec();
   const S s = v.norm();

@@ -2,14 +2,14 @@
 // skeleton, found from one frame of the user standing upright in a T-pose, facing forward.
 //   offsets: o_k = q_k^-1 Yaw(headset forward), so that at calibration every calibrated tracker
 //            q_k o_k has the body's facing frame (X left, Y up, Z forward), the convention the
-//            network was trained with (trackers/synthesis.hpp);
+//            network was trained with (recordings/tracker_synthesis.hpp);
 //   scale:   s = standing pelvis height of the standard skeleton / the user's (headset heights when
 //            no pelvis tracker). Positions are multiplied by s before the features, and the output
 //            pose is divided by s to match the user's size.
 #pragma once
 #include <array>
 
-#include "sparsebody/trackers/synthesis.hpp"
+#include "sparsebody/features/heading_frame.hpp"
 #include "sparsebody/trackers/types.hpp"
 
 namespace sparsebody::features {
@@ -27,7 +27,7 @@ struct Calibration {
     if (!f.valid[0]) return false;
     const Eigen::Quaterniond qh = to_eigen(f.pose[0].orientation).normalized();
     const Eigen::Vector3d fwd = -(qh * Eigen::Vector3d::UnitZ());
-    const Eigen::Matrix3d yaw = trackers::yaw_frame(fwd, Eigen::Matrix3d::Identity());
+    const Eigen::Matrix3d yaw = yaw_frame(fwd, Eigen::Matrix3d::Identity());
     if (!to_eigen(f.pose[0].position).allFinite()) return false;
     Calibration c;
     for (int k = 0; k < trackers::kTrackerCount; ++k) {

@@ -21,6 +21,19 @@
 
 namespace sparsebody::features {
 
+// Rotation about +Y whose Z axis is the ground projection of `forward`; `fallback` when vertical.
+inline Eigen::Matrix3d yaw_frame(const Eigen::Vector3d& forward, const Eigen::Matrix3d& fallback) noexcept {
+  Eigen::Vector3d f(forward.x(), 0.0, forward.z());
+  const double n = f.norm();
+  if (!(n >= 1e-3)) return fallback;
+  const Eigen::Vector3d z = f / n;
+  Eigen::Matrix3d R;
+  R.col(0) = Eigen::Vector3d(z.z(), 0.0, -z.x());
+  R.col(1) = Eigen::Vector3d::UnitY();
+  R.col(2) = z;
+  return R;
+}
+
 // theta wrapped to (-pi, pi] as atan2(sin, cos) (the same expression as the Python side).
 inline double wrap_angle(double a) noexcept { return std::atan2(std::sin(a), std::cos(a)); }
 

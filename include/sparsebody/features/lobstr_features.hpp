@@ -12,7 +12,7 @@
 #include <array>
 
 #include "sparsebody/pose/rotation6d.hpp"
-#include "sparsebody/trackers/synthesis.hpp"
+#include "sparsebody/features/heading_frame.hpp"
 #include "sparsebody/trackers/types.hpp"
 
 namespace sparsebody::features {
@@ -28,7 +28,7 @@ class LoBSTrFeatures {
   void compute(const std::array<trackers::PoseD, trackers::kTrackerCount>& t, S* x) noexcept {
     const trackers::PoseD& pel = t[3];
     const Eigen::Matrix3d Rp = pel.orientation.toRotationMatrix();
-    const Eigen::Matrix3d Rr = trackers::yaw_frame(Rp.col(2), have_prev_ ? Rr_prev_ : Eigen::Matrix3d::Identity());
+    const Eigen::Matrix3d Rr = yaw_frame(Rp.col(2), have_prev_ ? Rr_prev_ : Eigen::Matrix3d::Identity());
     const Eigen::Vector3d pr(pel.position.x(), 0.0, pel.position.z());
     const Eigen::Matrix3d RrT = Rr.transpose();
     Eigen::Vector3d pl[3];

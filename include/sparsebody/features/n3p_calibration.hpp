@@ -19,7 +19,7 @@
 #include "sparsebody/features/calibration.hpp"
 #include "sparsebody/features/n3p_tracker_input.hpp"
 #include "sparsebody/pose/skeleton.hpp"
-#include "sparsebody/trackers/synthesis.hpp"
+#include "sparsebody/features/heading_frame.hpp"
 #include "sparsebody/trackers/types.hpp"
 
 namespace sparsebody::features::n3p {
@@ -65,7 +65,7 @@ struct N3PCalibration {
     g.valid[3] = false;
     if (!c.base.from_tpose(g, standard_hips_height, standard_head_height)) return false;
     const Eigen::Quaterniond qh = trackers::to_eigen(f.pose[0].orientation).normalized();
-    const Eigen::Matrix3d yaw = trackers::yaw_frame(-(qh * Eigen::Vector3d::UnitZ()), Eigen::Matrix3d::Identity());
+    const Eigen::Matrix3d yaw = yaw_frame(-(qh * Eigen::Vector3d::UnitZ()), Eigen::Matrix3d::Identity());
     const Eigen::Vector3d head = trackers::to_eigen(f.pose[0].position);
     const std::array<Eigen::Vector3d, 2> w = tpose_wrists(skeleton);
     bool ok = f.valid[1] && f.valid[2];

@@ -102,10 +102,10 @@ class NetworkWeights {
 };
 
 // What step_guarded() did with a frame.
-enum class StepStatus {
-  kOk,             // stepped normally
-  kRejectedInput,  // an input was NaN/Inf: nothing changed, output() still holds the last good output
-  kStateReset,     // the step produced a non-finite output (diverged state): the recurrent state was
+enum class NetStatus {
+  Ok,             // stepped normally
+  RejectedInput,  // an input was NaN/Inf: nothing changed, output() still holds the last good output
+  StateReset,     // the step produced a non-finite output (diverged state): the recurrent state was
                    // reset to zero and output() still holds the last good output
 };
 
@@ -145,9 +145,9 @@ class Network {
   // step() with the bad-input policy applied: a frame with a non-finite input is not fed to the
   // network (a NaN would poison the hidden state for good), and a non-finite result resets the
   // recurrent state; in both cases output() keeps the last good output (zeros before any).
-  StepStatus step_guarded(const T* x) noexcept {
+  NetStatus step_guarded(const T* x) noexcept {
     for (int i = 0; i < in_size; ++i)
-      if (!std::isfinite(x[i])) return StepStatus::kRejectedInput;
+      if (!std::isfinite(x[i])) return NetStatus::RejectedInput;
     T* last = mem_->last_good.data();
     const T* y = step(x);
     bool finite = true;
@@ -155,10 +155,10 @@ class Network {
     if (!finite) {
       reset();
       for (int i = 0; i < out_size; ++i) mem_->output.v[i] = last[i];
-      return StepStatus::kStateReset;
+      return NetStatus::StateReset;
     }
     for (int i = 0; i < out_size; ++i) last[i] = y[i];
-    return StepStatus::kOk;
+    return NetStatus::Ok;
   }
   // Outputs of the last step.
   Eigen::Map<const Output> output() const noexcept { return Eigen::Map<const Output>(mem_->output.data()); }

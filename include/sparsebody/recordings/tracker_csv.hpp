@@ -21,7 +21,7 @@
 #include "sparsebody/core/error.hpp"
 #include "sparsebody/trackers/types.hpp"
 
-namespace sparsebody::io {
+namespace sparsebody::recordings {
 
 inline constexpr int kTrackerCsvFields = 1 + trackers::kTrackerCount * 8;
 
@@ -117,4 +117,4 @@ inline void write_tracker_csv(const std::string& path, const std::vector<tracker
   write_tracker_csv(f, frames, comment);
 }
 
-}  // namespace sparsebody::io
+}  // namespace sparsebody::recordings

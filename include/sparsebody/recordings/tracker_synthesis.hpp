@@ -11,24 +11,15 @@
 #include <algorithm>
 #include <vector>
 
-#include "sparsebody/io/bvh.hpp"
+#include "sparsebody/recordings/bvh.hpp"
+#include "sparsebody/features/heading_frame.hpp"
 #include "sparsebody/pose/joint_map.hpp"
 #include "sparsebody/trackers/types.hpp"
 
-namespace sparsebody::trackers {
-
-// Rotation about +Y whose Z axis is the ground projection of `forward`; `fallback` when vertical.
-inline Eigen::Matrix3d yaw_frame(const Eigen::Vector3d& forward, const Eigen::Matrix3d& fallback) noexcept {
-  Eigen::Vector3d f(forward.x(), 0.0, forward.z());
-  const double n = f.norm();
-  if (!(n >= 1e-3)) return fallback;
-  const Eigen::Vector3d z = f / n;
-  Eigen::Matrix3d R;
-  R.col(0) = Eigen::Vector3d(z.z(), 0.0, -z.x());
-  R.col(1) = Eigen::Vector3d::UnitY();
-  R.col(2) = z;
-  return R;
-}
+namespace sparsebody::recordings {
+using trackers::TrackerFrame;
+using trackers::to_eigen;
+using trackers::to_xr;
 
 // Metres per file unit guessed from the leg length (cm, m, inches, mm; else a 0.85 m leg).
 inline double guess_units(const pose::Skeleton& s, const pose::JointMap& m) noexcept {
@@ -45,7 +36,7 @@ struct SyntheticTrackers {
   double leg = 0;                    // clip leg length (metres)
 };
 
-inline SyntheticTrackers synthesize_trackers(const io::BvhClip& clip, const pose::JointMap& m, double units) {
+inline SyntheticTrackers synthesize_trackers(const BvhClip& clip, const pose::JointMap& m, double units) {
   using pose::Role;
   const pose::Skeleton& s = clip.skeleton;
   SyntheticTrackers out;
@@ -65,7 +56,7 @@ inline SyntheticTrackers synthesize_trackers(const io::BvhClip& clip, const pose
     clip.world_pose(f, tmp, tr, w, units);
     const Eigen::Matrix3d Fh = w.rotation[m[Role::Hips]].toRotationMatrix() * F_local;
     if (f == 0) {
-      const Eigen::Matrix3d yaw0 = yaw_frame(Fh.col(2), Eigen::Matrix3d::Identity());
+      const Eigen::Matrix3d yaw0 = features::yaw_frame(Fh.col(2), Eigen::Matrix3d::Identity());
       for (int k = 0; k < 3; ++k) o[k] = w.rotation[joints[k]].toRotationMatrix().transpose() * yaw0;
     }
     TrackerFrame& t = out.frames[f];
@@ -102,4 +93,4 @@ inline void to_openxr_convention(std::vector<TrackerFrame>& frames) noexcept {
     for (auto& p : f.pose) p.orientation = to_xr(Eigen::Quaterniond(to_eigen(p.orientation) * half));
 }
 
-}  // namespace sparsebody::trackers
+}  // namespace sparsebody::recordings

@@ -22,7 +22,7 @@
 #include "sparsebody/pose/body_pose.hpp"
 #include "sparsebody/pose/skeleton.hpp"
 
-namespace sparsebody::io {
+namespace sparsebody::recordings {
 
 enum class BvhChannel : unsigned char { Xposition, Yposition, Zposition, Xrotation, Yrotation, Zrotation };
 
@@ -268,7 +268,7 @@ class BvhWriter {
       for (int a = j; a >= 0 && a != next_parent; a = s_.parents[a])
         out << std::string(static_cast<std::size_t>(depth[a]) * 2, ' ') << "}\n";
     }
-    out << "MOTION\nFrames: " << lines_.size() << "\nFrame Time: " << std::setprecision(8) << frame_time_ << "\n";
+    out << "MOTION\n_frames: " << lines_.size() << "\n_frame Time: " << std::setprecision(8) << frame_time_ << "\n";
     for (const auto& l : lines_) out << l << "\n";
   }
 
@@ -285,4 +285,4 @@ class BvhWriter {
   std::vector<std::string> lines_;
 };
 
-}  // namespace sparsebody::io
+}  // namespace sparsebody::recordings

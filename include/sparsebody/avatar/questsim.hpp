@@ -9,20 +9,20 @@
 //
 // Latency (§3.5): the policy acting for user time t observes frames up to t + NF, so it can only run
 // once frame t + NF has arrived. The character therefore tracks the user NF control periods late:
-// NF / 36 Hz = 6 / 36 s = 166.7 ms (the paper's "160 ms"). latency() returns it, trackedTime() the
+// NF / 36 Hz = 6 / 36 s = 166.7 ms (the paper's "160 ms"). latency() returns it, tracked_time() the
 // user time the character currently corresponds to (newest tick time - latency()).
 // Start-up: the window is filled with the first usable frame, so control starts immediately, as if
 // the user had stood still for NF frames before.
 //
-// Avatar scale (§3.6): the avatar is character::avatarForUserHeight(h) (lengths x h/1.75, masses x
-// (h/1.75)^3, inertias x (h/1.75)^5), h the user's height estimated by userHeightFromHeadset() from a
+// Avatar scale (§3.6): the avatar is character::avatar_for_user_height(h) (lengths x h/1.75, masses x
+// (h/1.75)^3, inertias x (h/1.75)^5), h the user's height estimated by user_height_from_headset() from a
 // frame where the user stands upright: h = headset height / eye_height_ratio (0.936: eye height over
 // stature, Drillis & Contini 1966). The same h is the observation's o_user,scale. The height is fixed
 // for the controller's lifetime (building a model allocates); make a new controller for a new user.
 // Joint "friction of 0.1" (Appendix A) is a passive viscous damping of 0.1 N m s/rad on every joint,
 // integrated implicitly by the simulator. Floor friction is the simulator's default mu = 1.0.
 //
-// Recovery (each is reported by tick()/controlStep() and counted):
+// Recovery (each is reported by tick()/control_step() and counted):
 //   - bad tracker input (trackers/sanitizer.hpp): NaN/Inf, a non-unit quaternion, an invalid flag or
 //     a jump > 1 m in one tick make a device invalid for that tick and its last good pose is held;
 //     before the first valid headset frame nothing is simulated (Waiting); a long headset loss
@@ -42,16 +42,16 @@
 // non-finite number, and a state corrupted from outside is reset as above), torques are finite by
 // construction, and a rejected observation is zeroed.
 // Templates: S = simulation scalar (float or double); W = policy weight storage: float, nn::f16
-// (half the bytes) or nn::q8 (int8, approximate: nn/int8.hpp); the policy computes in float. tick(), push() and controlStep() never
+// (half the bytes) or nn::q8 (int8, approximate: nn/int8.hpp); the policy computes in float. tick(), push() and control_step() never
 // allocate, throw or lock; the constructor allocates everything once.
 //
 // Use:
-//   auto w = control::QuestSimController<>::loadWeights("questsim_policy.json");   // kind "questsim_policy"
-//   auto c = control::QuestSimController<>::fromStandingFrame(w, standing_frame);    // nullptr if no height
-//   // or: control::QuestSimController<> c(w, control::userHeightFromHeadset(standing_frame));
+//   auto w = avatar::QuestSimPipeline<>::load_weights("questsim_policy.json");   // kind "questsim_policy"
+//   auto c = avatar::QuestSimPipeline<>::from_standing_frame(w, standing_frame);    // nullptr if no height
+//   // or: avatar::QuestSimPipeline<> c(w, avatar::user_height_from_headset(standing_frame));
 //   for (frame : frames) c->push(frame);           // any rate; runs one control step per 36 Hz tick
 //   c->simulator().data().R[i], .p[i]              // the avatar's body poses (world = stage space)
-//   c->trackedTime()                               // the user time those poses correspond to
+//   c->tracked_time()                               // the user time those poses correspond to
 #pragma once
 #include <array>
 #include <cmath>
@@ -65,7 +65,7 @@
 #include "sparsebody/trackers/resampler.hpp"
 #include "sparsebody/trackers/sanitizer.hpp"
 
-namespace sparsebody::control {
+namespace sparsebody::avatar {
 
 struct QuestSimConfig {
   double control_rate = 36.0;      // Hz: policy rate (Appendix A: 1/36 s)
@@ -73,7 +73,7 @@ struct QuestSimConfig {
   double torque_scale = 200.0;     // N m per unit of policy output (Appendix A: [-1, 1] -> [-200, 200])
   double joint_damping = 0.1;      // passive joint damping, N m s/rad (Appendix A: "friction of 0.1")
   double eye_height_ratio = 0.936; // standing headset height / stature
-  double min_height = 1.0, max_height = 2.4;  // heights accepted by userHeightFromHeadset (m)
+  double min_height = 1.0, max_height = 2.4;  // heights accepted by user_height_from_headset (m)
   double fall_height_ratio = 0.5;  // root below this fraction of its standing height: fallen
   double fall_tilt = 1.2;          // rad (~69 deg): root up-axis tilt beyond this: fallen
   double max_gap = 0.25;           // s: resampler time gap that restarts
@@ -86,10 +86,10 @@ enum class QuestSimEvent : unsigned char {
   Waiting,            // no valid headset frame yet: nothing simulated
   TrackerReset,       // tracker restart (long loss, origin jump, time gap): character reset, then stepped
   RejectedAction,     // non-finite observation or policy output: zero torques were applied
-  SimulationFailure,  // a substep failed (see lastSimStatus()): character reset to standing
+  SimulationFailure,  // a substep failed (see last_sim_status()): character reset to standing
   Fall,               // the character fell: reset to standing
 };
-inline const char* eventName(QuestSimEvent e) {
+inline const char* event_name(QuestSimEvent e) {
   switch (e) {
     case QuestSimEvent::Stepped: return "stepped";
     case QuestSimEvent::Waiting: return "waiting";
@@ -102,7 +102,7 @@ inline const char* eventName(QuestSimEvent e) {
 
 // User height (m) from a frame where the user stands upright: headset height / eye_height_ratio.
 // NaN when the headset is invalid or non-finite, or the height is outside [min_height, max_height].
-inline double userHeightFromHeadset(const trackers::TrackerFrame& standing, const QuestSimConfig& cfg = {}) noexcept {
+inline double user_height_from_headset(const trackers::TrackerFrame& standing, const QuestSimConfig& cfg = {}) noexcept {
   const int H = static_cast<int>(trackers::Tracker::Head);
   const double y = standing.pose[H].position.y;
   if (!standing.valid[H] || !std::isfinite(y)) return std::nan("");
@@ -112,13 +112,13 @@ inline double userHeightFromHeadset(const trackers::TrackerFrame& standing, cons
 
 // S: simulation scalar; W: the policy's weight storage (float, or nn::f16); NF future frames;
 // NB / NJ: the avatar's bodies and non-root DoFs (the default avatar's unless a custom one is given).
-template <class S = float, class W = float, int NF = 6, int NB = kDefaultAvatarBodies, int NJ = kDefaultAvatarJointDofs>
-class QuestSimController {
+template <class S = float, class W = float, int NF = 6, int NB = character::kDefaultAvatarBodies, int NJ = character::kDefaultAvatarJointDofs>
+class QuestSimPipeline {
  public:
-  static constexpr int MB = 24, MD = 72;  // bounds of character::defaultAvatar
+  static constexpr int MB = 24, MD = 72;  // bounds of character::default_avatar
   using Model = dynamics::Model<S, MB, MD>;
   using Sim = dynamics::Simulator<S, MB, MD>;
-  using Builder = QuestSimObservationBuilder<S, MB, MD, NB, NJ, NF>;
+  using Builder = control::QuestSimObservationBuilder<S, MB, MD, NB, NJ, NF>;
   using Layout = typename Builder::Layout;
   static constexpr int kObservationSize = Layout::size;
   static constexpr int kActionSize = NJ;
@@ -126,35 +126,35 @@ class QuestSimController {
   using Weights = nn::NetworkWeights<Net>;
   using Window = typename Builder::UserWindow;
 
-  static std::shared_ptr<const Weights> loadWeights(const std::string& path) {
+  static std::shared_ptr<const Weights> load_weights(const std::string& path) {
     return Weights::load(path, networks::kQuestSimPolicyKind);
   }
 
   // Avatar scaled to `user_height` (m). Throws std::invalid_argument for a non-finite or
   // non-positive height, or when the avatar does not have NB bodies / NJ + 6 DoFs.
-  QuestSimController(std::shared_ptr<const Weights> weights, double user_height, QuestSimConfig cfg = {},
+  QuestSimPipeline(std::shared_ptr<const Weights> weights, double user_height, QuestSimConfig cfg = {},
                      character::AvatarOptions avatar = {})
-      : QuestSimController(std::move(weights), scaledAvatar(user_height, cfg, avatar), user_height, cfg) {}
+      : QuestSimPipeline(std::move(weights), scaled_avatar(user_height, cfg, avatar), user_height, cfg) {}
 
-  // The avatar for the user standing upright in `standing` (userHeightFromHeadset); nullptr when
+  // The avatar for the user standing upright in `standing` (user_height_from_headset); nullptr when
   // that frame gives no usable height (headset invalid, non-finite, or outside the height range).
-  static std::unique_ptr<QuestSimController> fromStandingFrame(std::shared_ptr<const Weights> weights,
+  static std::unique_ptr<QuestSimPipeline> from_standing_frame(std::shared_ptr<const Weights> weights,
                                                                const trackers::TrackerFrame& standing,
                                                                QuestSimConfig cfg = {}) {
-    const double h = userHeightFromHeadset(standing, cfg);
+    const double h = user_height_from_headset(standing, cfg);
     if (std::isnan(h)) return nullptr;
-    return std::make_unique<QuestSimController>(std::move(weights), h, cfg);
+    return std::make_unique<QuestSimPipeline>(std::move(weights), h, cfg);
   }
 
   // A custom model (already at the user's scale; its joint damping is used as given).
-  QuestSimController(std::shared_ptr<const Weights> weights, const Model& model, double user_height, QuestSimConfig cfg)
+  QuestSimPipeline(std::shared_ptr<const Weights> weights, const Model& model, double user_height, QuestSimConfig cfg)
       : cfg_(cfg), height_(S(user_height)), sim_(std::make_unique<Sim>(model)), obs_builder_(model),
         policy_(std::move(weights)), resampler_(cfg.control_rate, cfg.max_gap), sanitizer_(cfg.sanitizer) {
     if (!(cfg.substeps >= 1) || !(cfg.control_rate > 0))
-      throw std::invalid_argument("QuestSimController: substeps >= 1 and control_rate > 0 required");
+      throw std::invalid_argument("QuestSimPipeline: substeps >= 1 and control_rate > 0 required");
     sim_->mode = dynamics::ControlMode::Torque;
     h_ = S(1.0 / (cfg.control_rate * cfg.substeps));
-    standing_q_ = model.neutralConfiguration();
+    standing_q_ = model.neutral_configuration();
     standing_root_y_ = standing_q_(1);
     zero_v_ = Sim::VecV::Zero(model.nv);
     tau_ = zero_v_;
@@ -164,9 +164,9 @@ class QuestSimController {
   }
 
   // Control period and the latency of the future frames (NF control periods).
-  double controlPeriod() const noexcept { return 1.0 / cfg_.control_rate; }
+  double control_period() const noexcept { return 1.0 / cfg_.control_rate; }
   double latency() const noexcept { return NF / cfg_.control_rate; }
-  double userHeight() const noexcept { return double(height_); }
+  double user_height() const noexcept { return double(height_); }
 
   // Any-rate input: resampled to the control rate; one tick (and control step) per 36 Hz sample.
   // Returns the number of ticks run.
@@ -176,9 +176,9 @@ class QuestSimController {
 
   // One control tick from a frame already at the control rate (time = this tick's user time).
   QuestSimEvent tick(const trackers::TrackerFrame& f, bool restart = false) noexcept {
-    const trackers::SanitizedFrame& sf = sanitizer_.process(f, controlPeriod());
+    const trackers::SanitizedFrame& sf = sanitizer_.process(f, control_period());
     if (!sf.usable) return last_event_ = QuestSimEvent::Waiting;
-    QuestSimSensorFrame<S> frame;
+    control::QuestSimSensorFrame<S> frame;
     for (int dev = 0; dev < 3; ++dev) {
       frame[dev].position = sf.pose[dev].position.template cast<S>();
       frame[dev].rotation = sf.pose[dev].orientation.toRotationMatrix().template cast<S>();
@@ -187,7 +187,7 @@ class QuestSimController {
     if (reset) {
       window_.fill(frame);
       times_.fill(f.time);
-      standUnderHeadset(frame);
+      stand_under_headset(frame);
       if (started_) ++tracker_resets_;
     } else {
       for (int k = 0; k < NF; ++k) { window_[k] = window_[k + 1]; times_[k] = times_[k + 1]; }
@@ -196,18 +196,18 @@ class QuestSimController {
     }
     const bool was_started = started_;
     started_ = true;
-    const QuestSimEvent e = controlStep();
+    const QuestSimEvent e = control_step();
     if (reset && was_started && e == QuestSimEvent::Stepped) return last_event_ = QuestSimEvent::TrackerReset;
     return e;
   }
 
   // The control step on the current window: observation, policy, torques, substeps, fall check.
-  QuestSimEvent controlStep() noexcept {
+  QuestSimEvent control_step() noexcept {
     QuestSimEvent e = QuestSimEvent::Stepped;
     obs_builder_.build(*sim_, window_, height_, obs_.data());
     bool finite = true;
     for (float x : obs_) finite &= static_cast<bool>(std::isfinite(x));
-    if (finite && policy_.step_guarded(obs_.data()) == nn::StepStatus::kOk) {
+    if (finite && policy_.step_guarded(obs_.data()) == nn::NetStatus::Ok) {
       const float* a = policy_.output().data();
       for (int k = 0; k < NJ; ++k) action_[k] = std::fmin(1.f, std::fmax(-1.f, a[k]));
     } else {
@@ -225,13 +225,13 @@ class QuestSimController {
       if (st != dynamics::StepStatus::Ok) {
         last_sim_status_ = st;
         ++simulation_failures_;
-        standUnderHeadset(window_[0]);
+        stand_under_headset(window_[0]);
         return last_event_ = QuestSimEvent::SimulationFailure;
       }
     }
     if (fallen()) {
       ++falls_;
-      standUnderHeadset(window_[0]);
+      stand_under_headset(window_[0]);
       return last_event_ = QuestSimEvent::Fall;
     }
     ++steps_;
@@ -246,14 +246,14 @@ class QuestSimController {
 
   // The character standing in its reference pose under the headset of `frame`, facing the
   // headset's heading (OpenXR: the device looks along its -Z), at rest. Used at start and by resets.
-  void standUnderHeadset(const QuestSimSensorFrame<S>& frame) noexcept {
+  void stand_under_headset(const control::QuestSimSensorFrame<S>& frame) noexcept {
     typename Sim::VecQ q = standing_q_;
     const dynamics::Vec3<S> fwd = -frame[0].rotation.col(2);
     const S theta = (std::abs(fwd.x()) + std::abs(fwd.z()) > S(1e-6)) ? std::atan2(fwd.x(), fwd.z()) : S(0);
     q(0) = frame[0].position.x();
     q(2) = frame[0].position.z();
     q(3) = std::cos(theta / 2); q(4) = S(0); q(5) = std::sin(theta / 2); q(6) = S(0);  // R_y(theta)
-    sim_->setState(q, zero_v_);
+    sim_->set_state(q, zero_v_);
     tau_.setZero();
     sim_->torques() = tau_;
     policy_.reset();
@@ -267,24 +267,24 @@ class QuestSimController {
   const std::array<float, NJ>& action() const noexcept { return action_; }  // policy output in [-1, 1]
   const typename Sim::VecV& torques() const noexcept { return tau_; }       // applied (N m), root entries 0
   const Window& window() const noexcept { return window_; }
-  const Builder& observationBuilder() const noexcept { return obs_builder_; }
+  const Builder& observation_builder() const noexcept { return obs_builder_; }
   const nn::Network<Net>& policy() const noexcept { return policy_; }
   bool started() const noexcept { return started_; }
-  double trackedTime() const noexcept { return times_[0]; }   // user time the character tracks
-  double newestTime() const noexcept { return times_[NF]; }
-  QuestSimEvent lastEvent() const noexcept { return last_event_; }
-  dynamics::StepStatus lastSimStatus() const noexcept { return last_sim_status_; }
+  double tracked_time() const noexcept { return times_[0]; }   // user time the character tracks
+  double newest_time() const noexcept { return times_[NF]; }
+  QuestSimEvent last_event() const noexcept { return last_event_; }
+  dynamics::StepStatus last_sim_status() const noexcept { return last_sim_status_; }
   long long steps() const noexcept { return steps_; }
   long long falls() const noexcept { return falls_; }
-  long long simulationFailures() const noexcept { return simulation_failures_; }
-  long long trackerResets() const noexcept { return tracker_resets_; }
-  long long rejectedActions() const noexcept { return rejected_actions_; }
+  long long simulation_failures() const noexcept { return simulation_failures_; }
+  long long tracker_resets() const noexcept { return tracker_resets_; }
+  long long rejected_actions() const noexcept { return rejected_actions_; }
   const QuestSimConfig& config() const noexcept { return cfg_; }
 
  private:
-  static Model scaledAvatar(double h, const QuestSimConfig& cfg, character::AvatarOptions o) {
-    if (!(std::isfinite(h) && h > 0)) throw std::invalid_argument("QuestSimController: user height must be > 0");
-    Model m = character::avatarForUserHeight<S, MB, MD>(h, o);
+  static Model scaled_avatar(double h, const QuestSimConfig& cfg, character::AvatarOptions o) {
+    if (!(std::isfinite(h) && h > 0)) throw std::invalid_argument("QuestSimPipeline: user height must be > 0");
+    Model m = character::avatar_for_user_height<S, MB, MD>(h, o);
     for (int i = 1; i < m.nb; ++i) m.bodies[i].damping = S(cfg.joint_damping);
     m.finalize();
     return m;
@@ -311,4 +311,4 @@ class QuestSimController {
   long long steps_ = 0, falls_ = 0, simulation_failures_ = 0, tracker_resets_ = 0, rejected_actions_ = 0;
 };
 
-}  // namespace sparsebody::control
+}  // namespace sparsebody::avatar
