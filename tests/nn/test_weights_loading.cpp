@@ -168,6 +168,6 @@ TEST_CASE("missing file names the path") {
     nn::NetworkWeights<Net>::load("/nonexistent/dir/model.json", "mlp");
     FAIL("expected LoadError");
   } catch (const LoadError& e) {
-    CHECK(std::string(e.what()) == "/nonexistent/dir/model.json: cannot open file");
+    CHECK(std::string(e.what()) == "/nonexistent/dir/model.json: cannot open file (No such file or directory)");
   }
 }

@@ -226,7 +226,7 @@ Model<S, MB, MD> parse_model_json(const std::string& text, const std::string& so
 template <class S, int MB, int MD>
 Model<S, MB, MD> load_model_json(const std::string& path) {
   std::ifstream f(path);
-  if (!f) throw LoadError(path, "cannot open file");
+  if (!f) throw LoadError::cannot_open(path);
   std::stringstream ss;
   ss << f.rdbuf();
   return parse_model_json<S, MB, MD>(ss.str(), path);

@@ -71,9 +71,11 @@ inline std::vector<std::int64_t> parse_shape(const nlohmann::json& j, const std:
   return s;
 }
 
-inline void flatten_numbers(const nlohmann::json& j, std::vector<double>& out, const std::string& src, const std::string& what) {
+inline void flatten_numbers(const nlohmann::json& j, std::vector<double>& out, const std::string& src, const std::string& what,
+                            int depth = 0) {
   if (j.is_array()) {
-    for (const auto& e : j) flatten_numbers(e, out, src, what);
+    if (depth >= 16) throw LoadError(src, what + ": 'data' nests arrays deeper than 16 levels");
+    for (const auto& e : j) flatten_numbers(e, out, src, what, depth + 1);
   } else if (j.is_number()) {
     out.push_back(j.get<double>());
   } else {
@@ -88,9 +90,18 @@ inline Tensor parse_tensor(const nlohmann::json& j, const std::string& src, cons
   if (!j.contains("data")) throw LoadError(src, what + ": missing 'data'");
   Tensor t;
   t.shape = parse_shape(j["shape"], src, what);
-  std::size_t count = 1;
-  for (auto d : t.shape) count *= static_cast<std::size_t>(d);
+  // The element count, refused before anything is allocated when the data present cannot hold it
+  // (a shape of [1e9, 1e9] next to a short string), and never allowed to overflow.
   const auto& data = j["data"];
+  // A base64 string of n characters holds fewer than n values; number arrays are bounded by the
+  // text itself and are only checked for overflow here.
+  const std::size_t limit = data.is_string() ? data.get_ref<const std::string&>().size() : std::size_t(-1) / 16;
+  std::size_t count = 1;
+  for (auto d : t.shape) {
+    if (d != 0 && count > limit / static_cast<std::size_t>(d))
+      throw LoadError(src, what + ": shape " + shape_string(t.shape) + " is larger than its data");
+    count *= static_cast<std::size_t>(d);
+  }
   if (data.is_string()) {
     const std::string dtype = j.value("dtype", std::string("float32"));
     std::size_t width = dtype == "float32" ? 4 : dtype == "float64" ? 8 : 0;
@@ -113,7 +124,6 @@ inline Tensor parse_tensor(const nlohmann::json& j, const std::string& src, cons
       std::memcpy(t.values.data(), bytes.data(), count * 8);
     }
   } else if (data.is_array()) {
-    t.values.reserve(count);
     flatten_numbers(data, t.values, src, what);
     if (t.values.size() != count)
       throw LoadError(src, what + ": data holds " + std::to_string(t.values.size()) + " values, shape " +
@@ -148,7 +158,10 @@ inline WeightsDocument parse_weights(const std::string& text, const std::string&
     j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
     // e.what() gives "... parse error at line L, column C: ..." (truncated files end here too).
-    throw LoadError(source, std::string("not valid JSON (truncated or corrupt?): ") + e.what());
+    // e.what() ends with the last token read, which for a truncated tensor is all its base64:
+    // LoadError keeps the message to one bounded line.
+    throw LoadError(source, std::string("not valid JSON (truncated or corrupt?) at byte ") + std::to_string(e.byte) + ": " +
+                                excerpt(e.what(), 200));
   }
   if (!j.is_object()) throw LoadError(source, "expected a JSON object at top level");
   if (j.value("format", std::string()) != kWeightsFormat)
@@ -200,7 +213,7 @@ inline WeightsDocument parse_weights(const std::string& text, const std::string&
 
 inline std::string read_text_file(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
-  if (!f) throw LoadError(path, "cannot open file");
+  if (!f) throw LoadError::cannot_open(path);
   std::ostringstream ss;
   ss << f.rdbuf();
   if (f.bad()) throw LoadError(path, "read error");

@@ -16,7 +16,7 @@ template <typename T, typename W, typename HiddenAct, typename OutAct, typename 
 struct MlpBuilder;
 template <typename T, typename W, typename HiddenAct, typename OutAct, int... S, std::size_t... I>
 struct MlpBuilder<T, W, HiddenAct, OutAct, std::integer_sequence<int, S...>, std::index_sequence<I...>> {
-  static constexpr int sizes[] = {S...};
+  static constexpr int sizes[sizeof...(S)] = {S...};  // the bound spelled out: clang reads no element of an unbounded array in a constant expression
   static constexpr std::size_t n = sizeof...(I);
   using type =
       Sequential<Dense<T, sizes[I], sizes[I + 1], std::conditional_t<I + 1 == n, OutAct, HiddenAct>, true, W>...>;

@@ -112,7 +112,7 @@ struct BvhTokens {
     std::string w = word(expected);
     char* end = nullptr;
     const double v = std::strtod(w.c_str(), &end);
-    if (end == w.c_str() || *end != '\0' || !std::isfinite(v)) fail(std::string("expected ") + expected + ", got '" + w + "'");
+    if (end == w.c_str() || *end != '\0' || !std::isfinite(v)) fail(std::string("expected ") + expected + ", got '" + excerpt(w, 80) + "'");
     return v;
   }
   bool at_end() { std::string w; return !(cur >> w); }
@@ -194,14 +194,16 @@ inline BvhClip parse_bvh(std::istream& in, const std::string& source) {
   for (const auto& ch : c.channels) c.channel_count += static_cast<int>(ch.size());
   if (!t.next_line() || t.word("Frames:") != "Frames:") t.fail("expected 'Frames: N'");
   const double nf = t.number("the frame count");
-  if (nf < 0 || nf != std::floor(nf)) t.fail("expected a non-negative integer frame count");
+  if (!(nf >= 0 && nf <= 2147483647.0) || nf != std::floor(nf)) t.fail("expected an integer frame count 0..2147483647");
   c.frames = static_cast<int>(nf);
   if (!t.next_line() || t.word("Frame") != "Frame" || t.word("Time:") != "Time:") t.fail("expected 'Frame Time: seconds'");
   c.frame_time = t.number("the frame time in seconds");
   if (!(c.frame_time > 0)) t.fail("expected a positive frame time");
-  c.motion.resize(static_cast<std::size_t>(c.frames) * c.channel_count);
+  // Memory follows the frames actually present, never the header's count (a file claiming
+  // 999999999 frames fails at its real end instead of reserving gigabytes first).
   for (int f = 0; f < c.frames; ++f) {
     if (!t.next_line()) t.fail("expected " + std::to_string(c.frames) + " frames, found " + std::to_string(f));
+    c.motion.resize(c.motion.size() + static_cast<std::size_t>(c.channel_count));
     double* v = c.motion.data() + static_cast<std::size_t>(f) * c.channel_count;
     for (int i = 0; i < c.channel_count; ++i)
       v[i] = t.number(("frame " + std::to_string(f) + ": " + std::to_string(c.channel_count) + " numbers").c_str());
@@ -212,7 +214,7 @@ inline BvhClip parse_bvh(std::istream& in, const std::string& source) {
 
 inline BvhClip read_bvh(const std::string& path) {
   std::ifstream f(path);
-  if (!f) throw LoadError(path, "cannot open file");
+  if (!f) throw LoadError::cannot_open(path);
   return parse_bvh(f, path);
 }
 

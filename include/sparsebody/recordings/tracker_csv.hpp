@@ -4,7 +4,9 @@
 //   time,head_px,head_py,head_pz,head_qx,head_qy,head_qz,head_qw,head_valid,left_hand_px,...,pelvis_valid
 //   0.000000,0.01,1.62,0.03,0,0,0,1,1,...
 //
-// One row per frame: time in seconds (finite, any origin, any rate), then per tracker in the order
+// One row per frame: time in seconds (finite, any origin, any rate; kept as recorded even where it
+// repeats or goes back, so a session with clock glitches replays exactly: the pipelines' resampler
+// handles them), then per tracker in the order
 // head, left_hand, right_hand, pelvis: position x y z (metres), orientation x y z w, valid (0 or 1).
 // 33 fields. Pose values may be nan/inf (recorded glitches, handled by the pipeline's sanitizer);
 // time and valid may not. Errors: LoadError "file: line N: ..." naming the field and what was expected.
@@ -64,7 +66,7 @@ inline std::vector<trackers::TrackerFrame> parse_tracker_csv(std::istream& in, c
       if (f >= kTrackerCsvFields) fail("expected " + std::to_string(kTrackerCsvFields) + " comma-separated fields, got more");
       char* end = nullptr;
       v[f] = std::strtod(tok.c_str(), &end);
-      if (tok.empty() || end == tok.c_str() || *end != '\0') fail("field '" + names[f] + "': expected a number, got '" + tok + "'");
+      if (tok.empty() || end == tok.c_str() || *end != '\0') fail("field '" + names[f] + "': expected a number, got '" + excerpt(tok, 80) + "'");
       ++f;
       if (comma == std::string::npos) break;
       pos = comma + 1;
@@ -72,7 +74,6 @@ inline std::vector<trackers::TrackerFrame> parse_tracker_csv(std::istream& in, c
     if (f != kTrackerCsvFields)
       fail("expected " + std::to_string(kTrackerCsvFields) + " comma-separated fields, got " + std::to_string(f));
     if (!std::isfinite(v[0])) fail("field 'time': expected a finite number of seconds");
-    if (!frames.empty() && v[0] <= frames.back().time) fail("field 'time': expected increasing times");
     trackers::TrackerFrame fr;
     fr.time = v[0];
     for (int k = 0; k < trackers::kTrackerCount; ++k) {
@@ -90,7 +91,7 @@ inline std::vector<trackers::TrackerFrame> parse_tracker_csv(std::istream& in, c
 
 inline std::vector<trackers::TrackerFrame> read_tracker_csv(const std::string& path) {
   std::ifstream f(path);
-  if (!f) throw LoadError(path, "cannot open file");
+  if (!f) throw LoadError::cannot_open(path);
   return parse_tracker_csv(f, path);
 }
 
@@ -98,9 +99,11 @@ inline void write_tracker_csv(std::ostream& out, const std::vector<trackers::Tra
                               const std::string& comment = "") {
   out << "# sparsebody tracker stream: OpenXR stage space (metres, +Y up, -Z forward), quaternions x y z w\n";
   if (!comment.empty()) out << "# " << comment << "\n";
+  // Exact round trip, so a recorded session replays bit for bit: 17 significant digits for the
+  // double time stamps, 9 for the float poses (max_digits10 of each type).
   out << tracker_csv_header() << "\n" << std::setprecision(9);
   for (const auto& fr : frames) {
-    out << fr.time;
+    out << std::setprecision(17) << fr.time << std::setprecision(9);
     for (int k = 0; k < trackers::kTrackerCount; ++k) {
       const auto& p = fr.pose[k];
       out << ',' << p.position.x << ',' << p.position.y << ',' << p.position.z << ',' << p.orientation.x << ','
