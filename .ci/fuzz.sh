@@ -34,10 +34,15 @@ head -c 4096 /dev/urandom > $C/pipelines/random0
 /usr/bin/python3 -m weights_tool.questsim policy --bodies 21 --joint-dofs 48 --future 6 --seed 7 --out $B/questsim_policy.json > /dev/null
 export SPARSEBODY_QUESTSIM_POLICY=$PWD/$B/questsim_policy.json
 status=0
+# the crash inputs found so far, first (tests/fuzz/regressions/<harness>-<what>)
+for r in tests/fuzz/regressions/*; do
+  h=$(basename "$r"); h=${h%%-*}
+  $B/tests/fuzz/fuzz_$h "$r" > $B/regression.log 2>&1 || { echo "[fuzz] regression $r FAILED"; tail -20 $B/regression.log; status=1; }
+done
 for h in weights_json model_json bvh tracker_csv pipelines; do
   max_len=65536; [ $h = pipelines ] && max_len=4096
   echo "[fuzz] $h: ${SECONDS_EACH} s"
-  if ! $B/tests/fuzz/fuzz_$h -max_total_time="$SECONDS_EACH" -max_len=$max_len -rss_limit_mb=2048 -timeout=20 \
+  if ! $B/tests/fuzz/fuzz_$h -max_total_time="$SECONDS_EACH" -max_len=$max_len -rss_limit_mb=2048 -timeout=60 \
         -print_final_stats=1 -artifact_prefix=$B/artifacts/$h- $C/$h > $B/fuzz_$h.log 2>&1; then
     echo "[fuzz] $h FAILED: see $B/fuzz_$h.log and $B/artifacts/"; tail -40 $B/fuzz_$h.log; status=1
   fi

@@ -98,7 +98,7 @@ Model<S, MB, MD> parse_model_json(const std::string& text, const std::string& so
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {  // parse errors, and numbers too large for a double
     throw LoadError(source, std::string("invalid JSON: ") + e.what());
   }
   if (!j.is_object()) c.fail("", "expected a JSON object with a 'bodies' array");

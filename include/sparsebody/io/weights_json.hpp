@@ -162,6 +162,8 @@ inline WeightsDocument parse_weights(const std::string& text, const std::string&
     // LoadError keeps the message to one bounded line.
     throw LoadError(source, std::string("not valid JSON (truncated or corrupt?) at byte ") + std::to_string(e.byte) + ": " +
                                 excerpt(e.what(), 200));
+  } catch (const nlohmann::json::exception& e) {  // e.g. a number too large for a double (out_of_range.406)
+    throw LoadError(source, std::string("not valid JSON: ") + excerpt(e.what(), 200));
   }
   if (!j.is_object()) throw LoadError(source, "expected a JSON object at top level");
   if (j.value("format", std::string()) != kWeightsFormat)
