@@ -16,9 +16,9 @@ using Net = sparsebody::networks::LoBSTrNet<float, 16, 8, 37>;
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   try {
-    const auto doc = sparsebody::io::parse_weights(text, "fuzz.weights.json");
-    (void)doc;
-    const auto w = sparsebody::nn::NetworkWeights<Net>::from_string(text, "lobstr", "fuzz.weights.json");
+    // the document parser, then (when the document is one) binding it to a network
+    auto doc = sparsebody::io::parse_weights(text, "fuzz.weights.json");
+    const auto w = sparsebody::nn::NetworkWeights<Net>::from_document(std::move(doc), "lobstr");
     sparsebody::nn::Network<Net> net(w);
     float x[37] = {};
     const float* y = net.step(x);
