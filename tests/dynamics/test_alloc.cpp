@@ -7,6 +7,7 @@
 #include "sparsebody/dynamics/rnea.hpp"
 #include "sparsebody/dynamics/simulator.hpp"
 #include "support/alloc_counter.hpp"
+#include "test_util.hpp"
 
 using namespace sparsebody;
 using namespace sparsebody::dynamics;
@@ -37,7 +38,7 @@ static void check_no_alloc(bool root_servo) {
       sim.set_target(m.find("UpperArm_L"), quat_exp(Vec3<S>(S(0.3), S(0), S(0.01) * S(k))));
       (void)sim.step(S(1.0 / 120));
     }
-    aba(m, d, sim.q(), sim.v(), tau, qdd, S(1.0 / 120));
+    dyn_test::aba_damped(m, d, sim.q(), sim.v(), tau, qdd, S(1.0 / 120));
     rnea(m, d, sim.q(), sim.v(), qdd, tau);
     crba(m, d, sim.q());
     n = c.count();

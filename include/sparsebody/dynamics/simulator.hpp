@@ -143,16 +143,18 @@ class Simulator {
     q_prev_ = q_;
     v_prev_ = v_;
     // Kinematics of the current state are already in d_ (from the previous step or set_state).
-    for (int i = 0; i < m_.nb; ++i) d_.bias[i] = cross_force(d_.v[i], mul6v(m_.bodies[i].I, d_.v[i]));
+    velocity_product_forces(m_, d_);
     if (mode == ControlMode::PdTargets) pd_torques(m_, q_, v_, q_target_, v_target_, tau_);
     else passive_torques(m_, v_, tau_);
     tau_ += tau_user_;
     root_force_.setZero();
     root_torque_.setZero();
-    if (servo_root) root_servo_explicit();
-    const Vec6<S>* root_k = servo_root ? &root_k_ : nullptr;
     const S hd = implicit_damping ? h : S(0);
-    const bool with_kd = mode == ControlMode::PdTargets;
+    implicit_damping_diagonal(m_, hd, mode == ControlMode::PdTargets, d_.implicit_diagonal);
+    if (servo_root) {
+      root_servo_explicit();
+      root_servo_implicit(hd);
+    }
     if (contacts_enabled) {
       // Two buffers, flipped: the previous step's contacts stay readable for the warm start (see
       // detect_contacts) without copying them.
@@ -170,20 +172,21 @@ class Simulator {
     // re-solve of one block changes the other's implicit part).
     auto bound_root_servo = [&] {
       for (int k = 0; k < 2 && ok && servo_root && root_servo_over_bound(hd); ++k) {
-        ok = aba_solve(m_, d_, tau_, qdd_, hd, with_kd, root_k);
+        root_servo_implicit(hd);
+        ok = aba_solve(m_, d_, tau_, qdd_);
         ++passes_;
       }
     };
     if (nc_ == 0) {
       d_.has_ext = false;
-      ok = aba_solve(m_, d_, tau_, qdd_, hd, with_kd, root_k);
+      ok = aba_solve(m_, d_, tau_, qdd_);
       passes_ = 1;
       bound_root_servo();
     } else {
       const int max_passes = std::max(1, contact.max_passes);  // at least the one solve a step needs
       for (int pass = 0; pass < max_passes; ++pass) {
         assemble_contacts(m_, d_, contacts(), nc_, contact, h);
-        ok = aba_solve(m_, d_, tau_, qdd_, hd, with_kd, root_k);
+        ok = aba_solve(m_, d_, tau_, qdd_);
         ++passes_;
         if (!ok) break;
         if (!update_contact_set(m_, d_, contacts(), nc_, contact, h)) break;
@@ -231,6 +234,12 @@ class Simulator {
     root_k_.template head<3>().setConstant(sat_n ? S(0) : c.kd_angular);
     root_k_.template tail<3>().setConstant(sat_f ? S(0) : c.kd_linear);
     tau_.template segment<6>(b.v_index) += root_w_;
+  }
+
+  // The root servo's implicit damping h K_r on the root's entries of ABA's implicit diagonal.
+  void root_servo_implicit(S hd) {
+    const int k = m_.bodies[root_].v_index;
+    for (int r = 0; r < 6; ++r) d_.implicit_diagonal(k + r) = hd * root_k_(r);
   }
 
   // After a solve: the applied root wrench root_w_ - h K_r qdd per block (torque, force); a block
