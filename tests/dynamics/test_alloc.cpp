@@ -17,13 +17,13 @@ static void check_no_alloc(bool root_servo) {
   const auto m = character::default_avatar<S>();
   Simulator<S, 24, 72> sim(m);
   if (root_servo) {  // the root servo's implicit damping and bounded re-solves
-    sim.root_servo.enabled = true;
-    sim.root_servo.kp_linear = S(5000);
-    sim.root_servo.kd_linear = S(1000);
-    sim.root_servo.kp_angular = S(2000);
-    sim.root_servo.kd_angular = S(200);
-    sim.root_servo.max_force = S(300);
-    sim.root_servo.max_torque = S(100);
+    sim.options.root_servo.enabled = true;
+    sim.options.root_servo.kp_linear = S(5000);
+    sim.options.root_servo.kd_linear = S(1000);
+    sim.options.root_servo.kp_angular = S(2000);
+    sim.options.root_servo.kd_angular = S(200);
+    sim.options.root_servo.max_force = S(300);
+    sim.options.root_servo.max_torque = S(100);
   }
   auto q = sim.q();
   q(1) += S(0.005);  // feet just above the floor: contact candidates every step
