@@ -19,6 +19,7 @@ using namespace sparsebody::dynamics;
 template <class Model>
 static double aba_vs_crba(const Model& m, int trials, double h, unsigned seed, const Vec6<double>* root_damping = nullptr) {
   Data<double, Model::kMaxBodies, Model::kMaxDofs> d(m);
+  CrbaData<double, Model::kMaxBodies, Model::kMaxDofs> crba_out(m);
   std::mt19937 rng(seed);
   std::normal_distribution<double> n(0.0, 1.0);
   typename Model::VecQ q;
@@ -30,8 +31,8 @@ static double aba_vs_crba(const Model& m, int trials, double h, unsigned seed, c
     for (int k = 0; k < m.nv; ++k) tau(k) = 20 * n(rng);
     REQUIRE(dyn_test::aba_damped(m, d, q, qd, tau, qdd, h, root_damping));
     rnea(m, d, q, qd, zero, C);  // C(q, qd)
-    crba(m, d, q);
-    Eigen::MatrixXd M = d.Mass;
+    crba(m, d, q, crba_out);
+    Eigen::MatrixXd M = crba_out.M;
     for (int i = 0; i < m.nb; ++i) {
       const auto& b = m.bodies[i];
       for (int k = 0; k < joint_nv(b.joint); ++k) M(b.v_index + k, b.v_index + k) += h * (b.kd + b.damping);

@@ -31,6 +31,7 @@ static void check_no_alloc(bool root_servo) {
   auto qdd = sim.v();
   auto tau = sim.v();
   Data<S, 24, 72> d(m);
+  CrbaData<S, 24, 72> crba_out(m);
   long long n = 0;
   {
     sparsebody_test::AllocationCounter c;
@@ -40,7 +41,7 @@ static void check_no_alloc(bool root_servo) {
     }
     dyn_test::aba_damped(m, d, sim.q(), sim.v(), tau, qdd, S(1.0 / 120));
     rnea(m, d, sim.q(), sim.v(), qdd, tau);
-    crba(m, d, sim.q());
+    crba(m, d, sim.q(), crba_out);
     n = c.count();
   }
   CHECK(sim.num_contacts() > 0);

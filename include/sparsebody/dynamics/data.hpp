@@ -35,14 +35,11 @@ struct Data {
   // simulator writes h (kd + damping) per joint DoF and h K_r on the free root (implicit damping:
   // implicit_damping_diagonal in pd_servo.hpp, and the root servo). Zero: plain forward dynamics.
   typename M::VecV implicit_diagonal;
-  typename M::MatV Mass;                        // CRBA output
-  std::array<Mat6<S>, MaxBodies> Ic{};          // CRBA composite inertia
   typename M::VecV qdd, tau;
 
   Data() = default;
   explicit Data(const M& m) { resize(m); }
   void resize(const M& m) {
-    Mass.setZero(m.nv, m.nv);
     qdd.setZero(m.nv);
     tau.setZero(m.nv);
     implicit_diagonal.setZero(m.nv);
