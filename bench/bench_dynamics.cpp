@@ -329,6 +329,7 @@ struct RbdlPeer {
   rbdl_math::MatrixNd H;
 
   explicit RbdlPeer(const H34& m) : id(m.nb) {
+    if (m.root_body() != 0) { std::fprintf(stderr, "RbdlPeer: the free root must be body 0\n"); std::abort(); }
     model.gravity = rbdl_math::Vector3d(m.gravity.x(), m.gravity.y(), m.gravity.z());
     for (int i = 0; i < m.nb; ++i) {
       const auto& b = m.bodies[i];

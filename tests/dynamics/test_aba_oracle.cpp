@@ -36,7 +36,7 @@ static double aba_vs_crba(const Model& m, int trials, double h, unsigned seed, c
     for (int i = 0; i < m.nb; ++i) {
       const auto& b = m.bodies[i];
       for (int k = 0; k < joint_nv(b.joint); ++k) M(b.v_index + k, b.v_index + k) += h * (b.kd + b.damping);
-      if (b.joint == JointType::Free && root_damping)
+      if (i == m.root_body() && root_damping)
         for (int k = 0; k < 6; ++k) M(b.v_index + k, b.v_index + k) += h * (*root_damping)(k);
     }
     const Eigen::VectorXd ref = M.llt().solve(Eigen::VectorXd(tau - C));

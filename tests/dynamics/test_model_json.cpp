@@ -76,3 +76,27 @@ TEST_CASE("model JSON validation names the file, the body and the field") {
   many += "]}";
   CHECK(error_of(many).find("MaxBodies") != std::string::npos);
 }
+
+TEST_CASE("Model::root_body is the free joint; add_body refuses one attached to a body or a second one") {
+  CHECK(character::default_avatar<double>().root_body() == 0);
+  character::AvatarOptions o;
+  o.fixed_root = true;
+  CHECK(character::default_avatar<double>(o).root_body() == -1);
+  Model<double, 4, 20> m;
+  Body<double> base;
+  base.joint = JointType::Spherical;
+  base.mass = 1;
+  base.inertia = Mat3<double>::Identity();
+  CHECK(m.add_body("base", base) == 0);
+  CHECK(m.root_body() == -1);
+  Body<double> f = base;
+  f.joint = JointType::Free;
+  f.parent = 0;
+  CHECK(m.add_body("attached", f) == -1);
+  f.parent = -1;
+  CHECK(m.add_body("floating", f) == 1);
+  CHECK(m.root_body() == 1);
+  CHECK(m.add_body("second", f) == -1);
+  CHECK(m.nb == 2);
+  CHECK(m.cast<float>().root_body() == 1);
+}

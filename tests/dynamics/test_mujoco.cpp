@@ -52,7 +52,7 @@ template <class Model, class Vec>
 static void to_mj(const Model& m, const Mat3<double>& R, const Vec& x, double* out, const Vec3<double>* accel_w = nullptr,
                  const Vec3<double>* accel_v = nullptr, bool force = false) {
   for (int k = 0; k < m.nv; ++k) out[g_vperm[k]] = x(k);
-  if (m.bodies[0].joint == JointType::Free) {  // the root's DoFs are 0..5 in both
+  if (m.root_body() == 0) {  // a free root's DoFs are 0..5 in both
     const Vec3<double> ang = x.template head<3>(), lin = x.template segment<3>(3);
     Vec3<double> l = lin;
     if (accel_w && !force) l = lin + accel_w->cross(*accel_v);

@@ -47,9 +47,8 @@ bool aba_damped(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Mo
                 const typename Model<S, MB, MD>::VecV& qd, const typename Model<S, MB, MD>::VecV& tau,
                 typename Model<S, MB, MD>::VecV& qdd, S h, const Vec6<S>* root_damping = nullptr, bool include_kd = true) {
   implicit_damping_diagonal(m, h, include_kd, d.implicit_diagonal);
-  for (int i = 0; i < m.nb; ++i)
-    if (m.bodies[i].joint == JointType::Free && root_damping)
-      for (int r = 0; r < 6; ++r) d.implicit_diagonal(m.bodies[i].v_index + r) = h * (*root_damping)(r);
+  if (m.root_body() >= 0 && root_damping)
+    for (int r = 0; r < 6; ++r) d.implicit_diagonal(m.bodies[m.root_body()].v_index + r) = h * (*root_damping)(r);
   return aba(m, d, q, qd, tau, qdd);
 }
 }  // namespace dyn_test

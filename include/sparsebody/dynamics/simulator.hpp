@@ -71,7 +71,7 @@ class Simulator {
   Environment<S, MaxBoxes> env;     // ground plane and static boxes
 
   explicit Simulator(const ModelT& model, const SimulatorOptions<S>& opt = SimulatorOptions<S>{})
-      : options(opt), m_(model), d_(model), root_servo_(free_root(model)) {
+      : options(opt), m_(model), d_(model), root_servo_(model.root_body()) {
     q_ = m_.neutral_configuration();
     v_.setZero(m_.nv);
     q_target_ = q_;
@@ -136,12 +136,6 @@ class Simulator {
   }
 
  private:
-  static int free_root(const ModelT& m) {
-    int root = -1;
-    for (int i = 0; i < m.nb; ++i)
-      if (m.bodies[i].joint == JointType::Free) root = i;
-    return root;
-  }
   void refresh_kinematics() { forward_kinematics(m_, d_, q_, &v_); }
 
   // Check input: the state, the torques and, when a servo reads them, the targets are finite.
