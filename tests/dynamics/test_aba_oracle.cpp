@@ -19,6 +19,7 @@ using namespace sparsebody::dynamics;
 template <class Model>
 static double aba_vs_crba(const Model& m, int trials, double h, unsigned seed, const Vec6<double>* root_damping = nullptr) {
   Data<double, Model::kMaxBodies, Model::kMaxDofs> d(m);
+  CrbaData<double, Model::kMaxBodies, Model::kMaxDofs> crba_out(m);
   std::mt19937 rng(seed);
   std::normal_distribution<double> n(0.0, 1.0);
   typename Model::VecQ q;
@@ -28,14 +29,14 @@ static double aba_vs_crba(const Model& m, int trials, double h, unsigned seed, c
     dyn_test::random_state(m, rng, q, qd);
     tau.resize(m.nv);
     for (int k = 0; k < m.nv; ++k) tau(k) = 20 * n(rng);
-    REQUIRE(aba(m, d, q, qd, tau, qdd, h, true, root_damping));
+    REQUIRE(dyn_test::aba_damped(m, d, q, qd, tau, qdd, h, root_damping));
     rnea(m, d, q, qd, zero, C);  // C(q, qd)
-    crba(m, d, q);
-    Eigen::MatrixXd M = d.Mass;
+    crba(m, d, q, crba_out);
+    Eigen::MatrixXd M = crba_out.M;
     for (int i = 0; i < m.nb; ++i) {
       const auto& b = m.bodies[i];
       for (int k = 0; k < joint_nv(b.joint); ++k) M(b.v_index + k, b.v_index + k) += h * (b.kd + b.damping);
-      if (b.joint == JointType::Free && root_damping)
+      if (i == m.root_body() && root_damping)
         for (int k = 0; k < 6; ++k) M(b.v_index + k, b.v_index + k) += h * (*root_damping)(k);
     }
     const Eigen::VectorXd ref = M.llt().solve(Eigen::VectorXd(tau - C));
@@ -81,8 +82,8 @@ TEST_CASE("ABA with implicit root servo damping == (M + h (Kd + K_r))^-1 (tau - 
   std::decay_t<decltype(m)>::VecQ q;
   std::decay_t<decltype(m)>::VecV qd, tau = std::decay_t<decltype(m)>::VecV::Constant(m.nv, 5.0), a, b;
   dyn_test::random_state(m, rng, q, qd);
-  aba(m, d, q, qd, tau, a, 1.0 / 120);
-  aba(m, d, q, qd, tau, b, 1.0 / 120, true, &kr);
+  dyn_test::aba_damped(m, d, q, qd, tau, a, 1.0 / 120);
+  dyn_test::aba_damped(m, d, q, qd, tau, b, 1.0 / 120, &kr);
   std::printf("[aba-oracle] avatar with root damping: max rel err %.2e (without: %.2e); root qdd changed by %.2e\n", e, e_plain,
               (a - b).head<6>().norm());
   CHECK(e <= 1e-10);

@@ -7,6 +7,7 @@
 #include "sparsebody/dynamics/rnea.hpp"
 #include "sparsebody/dynamics/simulator.hpp"
 #include "support/alloc_counter.hpp"
+#include "test_util.hpp"
 
 using namespace sparsebody;
 using namespace sparsebody::dynamics;
@@ -16,13 +17,13 @@ static void check_no_alloc(bool root_servo) {
   const auto m = character::default_avatar<S>();
   Simulator<S, 24, 72> sim(m);
   if (root_servo) {  // the root servo's implicit damping and bounded re-solves
-    sim.root_servo.enabled = true;
-    sim.root_servo.kp_linear = S(5000);
-    sim.root_servo.kd_linear = S(1000);
-    sim.root_servo.kp_angular = S(2000);
-    sim.root_servo.kd_angular = S(200);
-    sim.root_servo.max_force = S(300);
-    sim.root_servo.max_torque = S(100);
+    sim.options.root_servo.enabled = true;
+    sim.options.root_servo.kp_linear = S(5000);
+    sim.options.root_servo.kd_linear = S(1000);
+    sim.options.root_servo.kp_angular = S(2000);
+    sim.options.root_servo.kd_angular = S(200);
+    sim.options.root_servo.max_force = S(300);
+    sim.options.root_servo.max_torque = S(100);
   }
   auto q = sim.q();
   q(1) += S(0.005);  // feet just above the floor: contact candidates every step
@@ -30,6 +31,7 @@ static void check_no_alloc(bool root_servo) {
   auto qdd = sim.v();
   auto tau = sim.v();
   Data<S, 24, 72> d(m);
+  CrbaData<S, 24, 72> crba_out(m);
   long long n = 0;
   {
     sparsebody_test::AllocationCounter c;
@@ -37,9 +39,9 @@ static void check_no_alloc(bool root_servo) {
       sim.set_target(m.find("UpperArm_L"), quat_exp(Vec3<S>(S(0.3), S(0), S(0.01) * S(k))));
       (void)sim.step(S(1.0 / 120));
     }
-    aba(m, d, sim.q(), sim.v(), tau, qdd, S(1.0 / 120));
+    dyn_test::aba_damped(m, d, sim.q(), sim.v(), tau, qdd, S(1.0 / 120));
     rnea(m, d, sim.q(), sim.v(), qdd, tau);
-    crba(m, d, sim.q());
+    crba(m, d, sim.q(), crba_out);
     n = c.count();
   }
   CHECK(sim.num_contacts() > 0);

@@ -67,7 +67,7 @@ static double slope_run(double deg, double mu, double* v0 = nullptr) {
   const double th = deg * M_PI / 180;
   const Quat<double> tilt(Eigen::AngleAxisd(th, Vec3<double>::UnitZ()));
   sim.env.ground_normal = tilt * Vec3<double>::UnitY();
-  sim.contact.friction = mu;
+  sim.options.contact.friction = mu;
   auto q = sim.q();
   q.head<3>() = sim.env.ground_normal * 0.1;  // resting on the plane
   q(3) = tilt.w(); q(4) = tilt.x(); q(5) = tilt.y(); q(6) = tilt.z();
@@ -158,7 +158,7 @@ TEST_CASE("a contact solve cap below 1 still solves each step once (same result 
   const auto m = character::default_avatar<double>();
   auto run = [&](int cap) {
     Simulator<double, 24, 72> sim(m);
-    sim.contact.max_passes = cap;
+    sim.options.contact.max_passes = cap;
     auto q = sim.q();
     q(1) += 0.005;  // feet just above the floor: contacts from the first step
     sim.set_state(q, sim.v());

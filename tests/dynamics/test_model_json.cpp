@@ -6,6 +6,7 @@
 #include "sparsebody/character/avatar.hpp"
 #include "sparsebody/dynamics/aba.hpp"
 #include "sparsebody/dynamics/model_json.hpp"
+#include "test_util.hpp"
 
 using namespace sparsebody;
 using namespace sparsebody::dynamics;
@@ -27,8 +28,8 @@ TEST_CASE("model JSON round-trips the default avatar") {
   Data<double, 24, 72> da(a), db(b);
   M::VecQ q = a.neutral_configuration();
   M::VecV qd = M::VecV::Constant(a.nv, 0.3), tau = M::VecV::Constant(a.nv, 1.0), qa, qb;
-  aba(a, da, q, qd, tau, qa, 0.01);
-  aba(b, db, q, qd, tau, qb, 0.01);
+  dyn_test::aba_damped(a, da, q, qd, tau, qa, 0.01);
+  dyn_test::aba_damped(b, db, q, qd, tau, qb, 0.01);
   CHECK((qa - qb).norm() < 1e-12 * qa.norm());
 }
 
@@ -74,4 +75,28 @@ TEST_CASE("model JSON validation names the file, the body and the field") {
     many += R"(,{"name":"B)" + std::to_string(i) + R"(","parent":"Hips","joint":"fixed","mass":1,"inertia":[1,1,1,0,0,0]})";
   many += "]}";
   CHECK(error_of(many).find("MaxBodies") != std::string::npos);
+}
+
+TEST_CASE("Model::root_body is the free joint; add_body refuses one attached to a body or a second one") {
+  CHECK(character::default_avatar<double>().root_body() == 0);
+  character::AvatarOptions o;
+  o.fixed_root = true;
+  CHECK(character::default_avatar<double>(o).root_body() == -1);
+  Model<double, 4, 20> m;
+  Body<double> base;
+  base.joint = JointType::Spherical;
+  base.mass = 1;
+  base.inertia = Mat3<double>::Identity();
+  CHECK(m.add_body("base", base) == 0);
+  CHECK(m.root_body() == -1);
+  Body<double> f = base;
+  f.joint = JointType::Free;
+  f.parent = 0;
+  CHECK(m.add_body("attached", f) == -1);
+  f.parent = -1;
+  CHECK(m.add_body("floating", f) == 1);
+  CHECK(m.root_body() == 1);
+  CHECK(m.add_body("second", f) == -1);
+  CHECK(m.nb == 2);
+  CHECK(m.cast<float>().root_body() == 1);
 }

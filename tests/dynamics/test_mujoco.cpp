@@ -52,7 +52,7 @@ template <class Model, class Vec>
 static void to_mj(const Model& m, const Mat3<double>& R, const Vec& x, double* out, const Vec3<double>* accel_w = nullptr,
                  const Vec3<double>* accel_v = nullptr, bool force = false) {
   for (int k = 0; k < m.nv; ++k) out[g_vperm[k]] = x(k);
-  if (m.bodies[0].joint == JointType::Free) {  // the root's DoFs are 0..5 in both
+  if (m.root_body() == 0) {  // a free root's DoFs are 0..5 in both
     const Vec3<double> ang = x.template head<3>(), lin = x.template segment<3>(3);
     Vec3<double> l = lin;
     if (accel_w && !force) l = lin + accel_w->cross(*accel_v);
@@ -88,7 +88,7 @@ static void cross_check(const Model& m, const char* tag, unsigned seed) {
     tau.resize(m.nv);
     for (int k = 0; k < m.nv; ++k) tau(k) = 10 * n(rng);
     // --- forward dynamics, no damping
-    REQUIRE(aba(m, d, q, qd, tau, qdd, 0.0));
+    REQUIRE(dyn_test::aba_damped(m, d, q, qd, tau, qdd, 0.0));
     forward_kinematics(m, d, q, &qd);
     const Mat3<double> R = d.R[0];
     const Vec3<double> w0 = qd.template head<3>(), v0 = qd.template segment<3>(3);
@@ -116,7 +116,7 @@ static void cross_check(const Model& m, const char* tag, unsigned seed) {
       const auto& b = m.bodies[i];
       for (int k = 0; k < joint_nv(b.joint); ++k) tau_pd(b.v_index + k) -= (b.kd + b.damping) * qd(b.v_index + k);
     }
-    REQUIRE(aba(m, d, q, qd, tau_pd, qdd, h));
+    REQUIRE(dyn_test::aba_damped(m, d, q, qd, tau_pd, qdd, h));
     for (int k = 0; k < m.nq; ++k) mdd->qpos[g_qperm[k]] = q(k);
     to_mj(m, R, qd, mdd->qvel);
     to_mj(m, R, tau, mdd->qfrc_applied, nullptr, nullptr, true);

@@ -36,7 +36,7 @@ TEST_CASE("free-floating tree without gravity conserves momentum; energy drift i
   double worst = 0;
   for (int t = 0; t < 200; ++t) {
     dyn_test::random_state(m, rng, q, qd, 3.0);
-    aba(m, d, q, qd, tau, qdd, 0.0);
+    dyn_test::aba_damped(m, d, q, qd, tau, qdd, 0.0);
     forward_kinematics(m, d, q, &qd);  // world poses (ABA itself does not need them)
     double scale = 0;
     for (int i = 0; i < m.nb; ++i) scale += (m.bodies[i].I * d.a[i]).norm();
@@ -48,8 +48,8 @@ TEST_CASE("free-floating tree without gravity conserves momentum; energy drift i
   // Integrated: spinning tree, semi-implicit Euler for 1 s; the drift must shrink like O(h).
   auto drift = [&](double h, double& max_dh, double& max_de) {
     Simulator<double, 16, 40> sim(m);
-    sim.contacts_enabled = false;
-    sim.mode = ControlMode::Torque;
+    sim.options.contacts_enabled = false;
+    sim.options.mode = ControlMode::Torque;
     std::mt19937 r2(4);
     dyn_test::random_state(m, r2, q, qd, 2.0);
     sim.set_state(q, qd);
@@ -85,7 +85,7 @@ TEST_CASE("with gravity and no contact the centre of mass falls at g") {
   for (int t = 0; t < 200; ++t) {
     dyn_test::random_state(m, rng, q, qd);
     for (int k = 0; k < m.nv; ++k) tau(k) = k < 6 ? 0.0 : 30 * n(rng);  // internal torques only
-    aba(m, d, q, qd, tau, qdd, 1.0 / 120);
+    dyn_test::aba_damped(m, d, q, qd, tau, qdd, 1.0 / 120);
     forward_kinematics(m, d, q, &qd);
     Vec3<double> acc = Vec3<double>::Zero();
     for (int i = 0; i < m.nb; ++i) {
@@ -104,7 +104,7 @@ TEST_CASE("with gravity and no contact the centre of mass falls at g") {
 
   // And integrated: COM(t) = c0 + v0 t + g t^2 / 2 within the O(h) error of Euler.
   Simulator<double, 24, 72> sim(m);
-  sim.contacts_enabled = false;
+  sim.options.contacts_enabled = false;
   dyn_test::random_state(m, rng, q, qd, 0.5);
   sim.set_state(q, qd);
   const Vec3<double> c0 = center_of_mass(m, sim.data());
@@ -125,9 +125,9 @@ static double stability_run(bool implicit_damping, StepStatus& status, double& m
   o.fixed_root = true;
   const auto m = character::default_avatar<double>(o);
   Simulator<double, 24, 72> sim(m);
-  sim.contacts_enabled = false;
-  sim.implicit_damping = implicit_damping;
-  sim.velocity_limit = 1e4;  // let the explicit run show its growth before it is stopped
+  sim.options.contacts_enabled = false;
+  sim.options.implicit_damping = implicit_damping;
+  sim.options.velocity_limit = 1e4;  // let the explicit run show its growth before it is stopped
   std::mt19937 rng(42);
   std::normal_distribution<double> n;
   max_speed = 0;

@@ -1,4 +1,4 @@
-// The simulator's root servo (RootServo): its damping is implicit in ABA like the joint servos',
+// The simulator's root servo (root_servo.hpp): its damping is implicit in ABA like the joint servos',
 // so stiff gains on the light pelvis are stable at h = 1/120 where the explicit form diverges;
 // the wrench it applies never exceeds its bounds.
 #include <doctest/doctest.h>
@@ -14,7 +14,7 @@ using namespace sparsebody::dynamics;
 
 namespace {
 // The residual servo's gains of Neural3Points' default controller (model_based_controller.hpp).
-void stiff_root_servo(RootServo<double>& rs) {
+void stiff_root_servo(RootServoOptions<double>& rs) {
   rs.enabled = true;
   rs.kp_linear = 5000;
   rs.kd_linear = 1000;
@@ -35,10 +35,10 @@ void random_spherical_targets(Sim& sim, const Model& m, std::mt19937& rng, doubl
 double hover_run(bool implicit_damping, StepStatus& status, double& err) {
   const auto m = character::default_avatar<double>();
   Simulator<double, 24, 72> sim(m);
-  sim.contacts_enabled = false;
-  sim.implicit_damping = implicit_damping;
-  sim.velocity_limit = 1e4;
-  stiff_root_servo(sim.root_servo);
+  sim.options.contacts_enabled = false;
+  sim.options.implicit_damping = implicit_damping;
+  sim.options.velocity_limit = 1e4;
+  stiff_root_servo(sim.options.root_servo);
   const auto q0 = sim.q();
   std::mt19937 rng(3);
   const double h = 1.0 / 120;
@@ -71,7 +71,7 @@ TEST_CASE("root servo kp 5000 / kd 1000, 2000 / 200 at h=1/120: implicit damping
 TEST_CASE("root servo: the applied wrench never exceeds its bounds, and reaches them") {
   const auto m = character::default_avatar<double>();
   Simulator<double, 24, 72> sim(m);
-  auto& rs = sim.root_servo;
+  auto& rs = sim.options.root_servo;
   stiff_root_servo(rs);
   rs.max_force = 400;
   rs.max_torque = 60;

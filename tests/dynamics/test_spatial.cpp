@@ -92,10 +92,10 @@ TEST_CASE("float ABA agrees with double ABA") {
   for (int t = 0; t < 100; ++t) {
     dyn_test::random_state(md, rng, q, qd);
     tau = Mo::VecV::Constant(md.nv, 5.0);
-    aba(md, dd, q, qd, tau, qdd, 1.0 / 120);
+    dyn_test::aba_damped(md, dd, q, qd, tau, qdd, 1.0 / 120);
     decltype(mf)::VecQ qf = q.cast<float>();
     decltype(mf)::VecV qdf = qd.cast<float>(), tauf = tau.cast<float>(), qddf;
-    aba(mf, df, qf, qdf, tauf, qddf, 1.0f / 120);
+    dyn_test::aba_damped(mf, df, qf, qdf, tauf, qddf, 1.0f / 120);
     worst = std::max(worst, (qddf.cast<double>() - qdd).norm() / qdd.norm());
   }
   std::printf("[float] ABA float vs double: max rel err %.2e\n", worst);

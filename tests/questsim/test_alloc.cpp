@@ -21,8 +21,8 @@ static void check_no_alloc() {
       if (k % 50 == 0) f.pose[1].position.x = std::nanf("");   // bad input
       if (k > 150 && k < 230) f.valid[0] = false;               // headset lost > 0.5 s: reset
       ticks += c.push(f);
-      if (k == 100) c.simulator().velocity_limit = 1e-6;        // one simulation failure
-      if (k == 102) c.simulator().velocity_limit = 500;
+      if (k == 100) c.simulator().options.velocity_limit = 1e-6;        // one simulation failure
+      if (k == 102) c.simulator().options.velocity_limit = 500;
     }
     n = counter.count();
   }

@@ -162,7 +162,7 @@ TEST_CASE("QuestSim: a failing simulation step is recovered (reset to standing u
   Ctl c(questsim_test::policy_weights<Ctl>(), 1.62);
   for (int k = 0; k < 10; ++k) c.tick(user_frame(k / 36.0));
   // Force a failure: velocity limit below anything the character does -> VelocityLimit.
-  c.simulator().velocity_limit = 1e-6f;
+  c.simulator().options.velocity_limit = 1e-6f;
   CHECK(c.tick(user_frame(10 / 36.0)) == QuestSimEvent::SimulationFailure);
   CHECK(c.last_sim_status() == dynamics::StepStatus::VelocityLimit);
   CHECK(c.simulation_failures() == 1);
@@ -170,7 +170,7 @@ TEST_CASE("QuestSim: a failing simulation step is recovered (reset to standing u
   const auto& head = c.window()[0][0].position;  // frame t: where the character now stands
   CHECK(c.simulator().q()(0) == doctest::Approx(head.x()));
   CHECK(c.simulator().q()(2) == doctest::Approx(head.z()));
-  c.simulator().velocity_limit = 500.f;
+  c.simulator().options.velocity_limit = 500.f;
   CHECK(c.tick(user_frame(11 / 36.0)) != QuestSimEvent::SimulationFailure);
   REQUIRE(outputs_finite(c));
   // A corrupted state (NaN written into the simulator from outside): the observation is rejected

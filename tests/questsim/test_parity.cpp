@@ -45,7 +45,7 @@ TEST_CASE("QuestSim parity: observation and policy against PyTorch (weights_tool
   for (int i = 1; i < m.nb; ++i) m.bodies[i].damping = 0.1;
   m.finalize();
   Sim sim(m);
-  sim.mode = dynamics::ControlMode::Torque;
+  sim.options.mode = dynamics::ControlMode::Torque;
   const Builder builder(m);
   std::mt19937 rng(11);
   std::normal_distribution<double> n;

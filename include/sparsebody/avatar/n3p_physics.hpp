@@ -136,7 +136,7 @@ class N3PPhysicsPipeline {
         fall_(cfg.fall),
         resampler_(direct_.meta().frame_rate) {
     if (policy) control_ = std::make_unique<ControlPredictor>(w, std::move(policy));
-    sim_.contact.max_passes = cfg.contact_passes;
+    sim_.options.contact.max_passes = cfg.contact_passes;
     for (auto& q : ref_) q = model_.neutral_configuration();
     q_tmp_ = model_.neutral_configuration();
     q_place_ = q_tmp_;
@@ -316,7 +316,7 @@ class N3PPhysicsPipeline {
       const S alpha = S(k + 1) / S(cfg_.substeps);
       if (policy) {
         tau_.setZero();
-        sim_.root_servo.enabled = false;
+        sim_.options.root_servo.enabled = false;
         residual_ = {};
       } else {
         controller_.apply(model_, sim_, alpha, tau_);

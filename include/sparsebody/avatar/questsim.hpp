@@ -152,7 +152,7 @@ class QuestSimPipeline {
         policy_(std::move(weights)), resampler_(cfg.control_rate, cfg.max_gap), sanitizer_(cfg.sanitizer) {
     if (!(cfg.substeps >= 1) || !(cfg.control_rate > 0))
       throw std::invalid_argument("QuestSimPipeline: substeps >= 1 and control_rate > 0 required");
-    sim_->mode = dynamics::ControlMode::Torque;
+    sim_->options.mode = dynamics::ControlMode::Torque;
     h_ = S(1.0 / (cfg.control_rate * cfg.substeps));
     standing_q_ = model.neutral_configuration();
     standing_root_y_ = standing_q_(1);

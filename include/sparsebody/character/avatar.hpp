@@ -12,6 +12,8 @@
 // Leg lengths are rescaled together so the ankle sits 4 % of stature above the floor (de Leva's
 // head + trunk + thigh + shank leave only 2 % for the ankle height).
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "sparsebody/dynamics/model.hpp"
@@ -34,152 +36,201 @@ struct AvatarOptions {
   bool fixed_root = false;        // weld the Hips to the world (testing, upper-body use)
 };
 
-template <class S, int MB = 24, int MD = 72>
-inline dynamics::Model<S, MB, MD> default_avatar(const AvatarOptions& o = AvatarOptions{}) {
-  using namespace dynamics;
-  using V = Vec3<S>;
-  namespace dl = de_leva;
-  Model<S, MB, MD> m;
-  m.name = "sparsebody_avatar";
-  const double s = o.height / (dl::kStatureMm / 1000.0);  // length scale
-  auto L = [&](const dl::Segment& g) { return S(g.length_mm / 1000.0 * s); };
+namespace detail {
+
+// Builds the default avatar: segment sizes from de Leva scaled to the height (length scale
+// s = height / 1.741 m), landmark heights of the reference pose, then the trunk chain, the arms and
+// the legs in that body order (Hips, Spine, Chest, Neck, Head, then per side L, R: Shoulder,
+// UpperArm, LowerArm, Hand; then per side UpperLeg, LowerLeg, Foot, Toes).
+template <class S, int MB, int MD>
+class AvatarBuilder {
+ public:
+  using V = dynamics::Vec3<S>;
+  using Segment = de_leva::Segment;
+
+  explicit AvatarBuilder(const AvatarOptions& o)
+      : o_(o), s_(o.height / (de_leva::kStatureMm / 1000.0)), M_(o.mass), H_(S(o.height)) {
+    namespace dl = de_leva;
+    // Landmark heights (world y) in the reference pose, from the top of the head down.
+    const S y_c7 = H_ - length(dl::kHead);
+    const S y_xyph = y_c7 - length(dl::kUpperTrunk);
+    const S y_omph = y_xyph - length(dl::kMiddleTrunk);
+    y_midh_ = y_omph - length(dl::kLowerTrunk);
+    ankle_h_ = S(0.04) * H_;
+    const double leg_k = double(y_midh_ - ankle_h_) / double(length(dl::kThigh) + length(dl::kShank));
+    l_thigh_ = S(leg_k) * length(dl::kThigh);
+    l_shank_ = S(leg_k) * length(dl::kShank);
+    m_.name = "sparsebody_avatar";
+  }
+
+  dynamics::Model<S, MB, MD> build() {
+    const int chest = add_trunk();
+    for (int side = 0; side < 2; ++side) add_arm(side, chest);  // L = +x
+    for (int side = 0; side < 2; ++side) add_leg(side);
+    return m_;
+  }
+
+ private:
+  using Body = dynamics::Body<S>;
+  using Mat3 = dynamics::Mat3<S>;
+  using JointType = dynamics::JointType;
+
+  S length(const Segment& g) const { return S(g.length_mm / 1000.0 * s_); }
+  S scaled(double metres) const { return S(metres * s_); }
+  JointType elbow_knee() const { return o_.hinge_knees_elbows ? JointType::Revolute : JointType::Spherical; }
+
   // Principal inertia from radii of gyration; `axis` = the segment's long axis (0 x, 1 y, 2 z).
   // Sagittal axis = anteroposterior (z); transverse = the remaining one.
-  auto inertia = [&](double mass, const dl::Segment& g, int axis, double len) {
-    Mat3<S> I = Mat3<S>::Zero();
+  static Mat3 inertia(double mass, const Segment& g, int axis, double len) {
+    Mat3 I = Mat3::Zero();
     const double rs = g.r_sag * len, rt = g.r_trans * len, rl = g.r_long * len;
     if (axis == 1) { I(0, 0) = mass * rt * rt; I(1, 1) = mass * rl * rl; I(2, 2) = mass * rs * rs; }
     else if (axis == 0) { I(0, 0) = mass * rl * rl; I(1, 1) = mass * rt * rt; I(2, 2) = mass * rs * rs; }
     else { I(0, 0) = mass * rt * rt; I(1, 1) = mass * rs * rs; I(2, 2) = mass * rl * rl; }
     return I;
-  };
-  auto body = [&](int parent, JointType jt, V pos, double mass, V com, const Mat3<S>& I) {
-    Body<S> b;
+  }
+  // A body; actuated joints get the options' servo gains and torque limit.
+  Body body(int parent, JointType jt, V pos, double mass, V com, const Mat3& I) const {
+    Body b;
     b.parent = parent; b.joint = jt; b.pos = pos; b.mass = S(mass); b.com = com; b.inertia = I;
     if (jt != JointType::Free && jt != JointType::Fixed) {
-      b.kp = S(o.kp); b.kd = S(o.kd); b.torque_limit = S(o.torque_limit);
+      b.kp = S(o_.kp); b.kd = S(o_.kd); b.torque_limit = S(o_.torque_limit);
     }
     return b;
-  };
-  auto capsule = [](Body<S>& b, V a, V c, S r) {
-    Shape<S>& sh = b.shapes[b.num_shapes++];
-    sh.type = Shape<S>::Type::Capsule; sh.pos = a; sh.pos2 = c; sh.radius = r;
-  };
-  auto sphere = [](Body<S>& b, V c, S r) {
-    Shape<S>& sh = b.shapes[b.num_shapes++];
-    sh.type = Shape<S>::Type::Sphere; sh.pos = c; sh.radius = r;
-  };
-  auto box = [](Body<S>& b, V c, V h) {
-    Shape<S>& sh = b.shapes[b.num_shapes++];
-    sh.type = Shape<S>::Type::Box; sh.pos = c; sh.half = h;
-  };
-  const double M = o.mass;
-  const S H = S(o.height);
-  // Landmark heights (world y) in the reference pose.
-  const S y_c7 = H - L(dl::kHead);
-  const S y_xyph = y_c7 - L(dl::kUpperTrunk);
-  const S y_omph = y_xyph - L(dl::kMiddleTrunk);
-  const S y_midh = y_omph - L(dl::kLowerTrunk);
-  const S ankle_h = S(0.04) * H;
-  const double leg_k = double(y_midh - ankle_h) / double(L(dl::kThigh) + L(dl::kShank));
-  const S l_thigh = S(leg_k) * L(dl::kThigh), l_shank = S(leg_k) * L(dl::kShank);
-  const S hip_x = S(0.085 * s), sh_x = S(0.03 * s), arm_x = S(0.175 * s), sh_drop = S(0.035 * s);
-  const JointType elbow_knee = o.hinge_knees_elbows ? JointType::Revolute : JointType::Spherical;
+  }
+  static void capsule(Body& b, V a, V c, S r) {
+    dynamics::Shape<S>& sh = b.shapes[b.num_shapes++];
+    sh.type = dynamics::Shape<S>::Type::Capsule; sh.pos = a; sh.pos2 = c; sh.radius = r;
+  }
+  static void sphere(Body& b, V c, S r) {
+    dynamics::Shape<S>& sh = b.shapes[b.num_shapes++];
+    sh.type = dynamics::Shape<S>::Type::Sphere; sh.pos = c; sh.radius = r;
+  }
+  static void box(Body& b, V c, V h) {
+    dynamics::Shape<S>& sh = b.shapes[b.num_shapes++];
+    sh.type = dynamics::Shape<S>::Type::Box; sh.pos = c; sh.half = h;
+  }
 
-  // Hips = de Leva lower trunk (omphalion..mid-hip); origin at mid-hip.
-  {
-    const S l = L(dl::kLowerTrunk);
-    Body<S> b = body(-1, o.fixed_root ? JointType::Fixed : JointType::Free, V(0, y_midh, 0),
-                     dl::kLowerTrunk.mass_fraction * M, V(0, S(1 - dl::kLowerTrunk.com) * l, 0),
-                     inertia(dl::kLowerTrunk.mass_fraction * M, dl::kLowerTrunk, 1, l));
-    capsule(b, V(-S(0.07 * s), S(0.35) * l, 0), V(S(0.07 * s), S(0.35) * l, 0), S(0.09 * s));
-    m.add_body("Hips", b);
+  // Hips (free root), Spine, Chest, Neck, Head; returns the Chest's index.
+  int add_trunk() {
+    namespace dl = de_leva;
+    {  // Hips = de Leva lower trunk (omphalion..mid-hip); origin at mid-hip.
+      const S l = length(dl::kLowerTrunk);
+      Body b = body(-1, o_.fixed_root ? JointType::Fixed : JointType::Free, V(0, y_midh_, 0),
+                    dl::kLowerTrunk.mass_fraction * M_, V(0, S(1 - dl::kLowerTrunk.com) * l, 0),
+                    inertia(dl::kLowerTrunk.mass_fraction * M_, dl::kLowerTrunk, 1, l));
+      capsule(b, V(-scaled(0.07), S(0.35) * l, 0), V(scaled(0.07), S(0.35) * l, 0), scaled(0.09));
+      m_.add_body("Hips", b);
+    }
+    {  // Spine = middle trunk (xiphoid..omphalion), origin at omphalion
+      const S l = length(dl::kMiddleTrunk);
+      Body b = body(0, JointType::Spherical, V(0, length(dl::kLowerTrunk), 0), dl::kMiddleTrunk.mass_fraction * M_,
+                    V(0, S(1 - dl::kMiddleTrunk.com) * l, 0), inertia(dl::kMiddleTrunk.mass_fraction * M_, dl::kMiddleTrunk, 1, l));
+      sphere(b, V(0, S(0.5) * l, 0), scaled(0.1));
+      m_.add_body("Spine", b);
+    }
+    int chest;
+    {  // Chest = upper trunk minus the two shoulders, origin at xiphoid
+      const double chest_mass = dl::kUpperTrunk.mass_fraction * M_ * 0.8;
+      const S l = length(dl::kUpperTrunk);
+      Body b = body(1, JointType::Spherical, V(0, length(dl::kMiddleTrunk), 0), chest_mass,
+                    V(0, S(1 - dl::kUpperTrunk.com) * l, 0), inertia(chest_mass, dl::kUpperTrunk, 1, l));
+      capsule(b, V(-scaled(0.08), S(0.5) * l, 0), V(scaled(0.08), S(0.5) * l, 0), scaled(0.1));
+      chest = m_.add_body("Chest", b);
+    }
+    const double head_seg = dl::kHead.mass_fraction * M_;
+    const S l_head = length(dl::kHead), l_neck = S(0.35) * l_head;
+    {  // Neck: lower 35 % of the head segment length, 15 % of its mass
+      const double mass = 0.15 * head_seg;
+      Body b = body(chest, JointType::Spherical, V(0, length(dl::kUpperTrunk), 0), mass, V(0, S(0.5) * l_neck, 0),
+                    inertia(mass, Segment{0, 0, 0, 0.3, 0.3, 0.3}, 1, double(l_neck)));
+      m_.add_body("Neck", b);
+    }
+    {  // Head: CoM from de Leva (59.76 % from the vertex) re-expressed from the head joint
+      const double mass = 0.85 * head_seg;
+      const S com_y = (S(1) - S(dl::kHead.com)) * l_head - l_neck;
+      Body b = body(3, JointType::Spherical, V(0, l_neck, 0), mass, V(0, std::max(com_y, S(0.3) * (l_head - l_neck)), 0),
+                    inertia(mass, dl::kHead, 1, double(l_head)));
+      sphere(b, V(0, S(0.45) * (l_head - l_neck), scaled(0.01)), scaled(0.1));
+      m_.add_body("Head", b);
+    }
+    return chest;
   }
-  {  // Spine = middle trunk (xiphoid..omphalion), origin at omphalion
-    const S l = L(dl::kMiddleTrunk);
-    Body<S> b = body(0, JointType::Spherical, V(0, L(dl::kLowerTrunk), 0), dl::kMiddleTrunk.mass_fraction * M,
-                     V(0, S(1 - dl::kMiddleTrunk.com) * l, 0), inertia(dl::kMiddleTrunk.mass_fraction * M, dl::kMiddleTrunk, 1, l));
-    sphere(b, V(0, S(0.5) * l, 0), S(0.1 * s));
-    m.add_body("Spine", b);
-  }
-  const double chest_mass = dl::kUpperTrunk.mass_fraction * M * 0.8;
-  {  // Chest = upper trunk minus the two shoulders, origin at xiphoid
-    const S l = L(dl::kUpperTrunk);
-    Body<S> b = body(1, JointType::Spherical, V(0, L(dl::kMiddleTrunk), 0), chest_mass,
-                     V(0, S(1 - dl::kUpperTrunk.com) * l, 0), inertia(chest_mass, dl::kUpperTrunk, 1, l));
-    capsule(b, V(-S(0.08 * s), S(0.5) * l, 0), V(S(0.08 * s), S(0.5) * l, 0), S(0.1 * s));
-    m.add_body("Chest", b);
-  }
-  const double head_seg = dl::kHead.mass_fraction * M;
-  const S l_head = L(dl::kHead), l_neck = S(0.35) * l_head;
-  {  // Neck: lower 35 % of the head segment length, 15 % of its mass
-    const double mass = 0.15 * head_seg;
-    Body<S> b = body(2, JointType::Spherical, V(0, L(dl::kUpperTrunk), 0), mass, V(0, S(0.5) * l_neck, 0),
-                     inertia(mass, dl::Segment{0, 0, 0, 0.3, 0.3, 0.3}, 1, double(l_neck)));
-    m.add_body("Neck", b);
-  }
-  {  // Head: CoM from de Leva (59.76 % from the vertex) re-expressed from the head joint
-    const double mass = 0.85 * head_seg;
-    const S com_y = (S(1) - S(dl::kHead.com)) * l_head - l_neck;
-    Body<S> b = body(3, JointType::Spherical, V(0, l_neck, 0), mass, V(0, std::max(com_y, S(0.3) * (l_head - l_neck)), 0),
-                     inertia(mass, dl::kHead, 1, double(l_head)));
-    sphere(b, V(0, S(0.45) * (l_head - l_neck), S(0.01 * s)), S(0.1 * s));
-    m.add_body("Head", b);
-  }
-  for (int side = 0; side < 2; ++side) {  // arms: L = +x
+
+  // Shoulder (clavicle/scapula: 10 % of the upper trunk), UpperArm, LowerArm (hinge about y), Hand.
+  void add_arm(int side, int chest) {
+    namespace dl = de_leva;
     const S sx = side == 0 ? S(1) : S(-1);
     const std::string suf = side == 0 ? "_L" : "_R";
-    const double sh_mass = dl::kUpperTrunk.mass_fraction * M * 0.1;
-    const int chest = 2;
-    Body<S> sh = body(chest, JointType::Spherical, V(sx * sh_x, L(dl::kUpperTrunk) - sh_drop, 0), sh_mass,
-                      V(sx * S(0.5) * (arm_x - sh_x), 0, 0),
-                      inertia(sh_mass, dl::Segment{0, 0, 0, 0.3, 0.3, 0.15}, 0, double(arm_x - sh_x)));
-    const int ish = m.add_body("Shoulder" + suf, sh);
-    const S lu = L(dl::kUpperArm), lf = L(dl::kForearm), lh = L(dl::kHand);
-    const double mu = dl::kUpperArm.mass_fraction * M, mf = dl::kForearm.mass_fraction * M, mh = dl::kHand.mass_fraction * M;
-    Body<S> ua = body(ish, JointType::Spherical, V(sx * (arm_x - sh_x), 0, 0), mu, V(sx * S(dl::kUpperArm.com) * lu, 0, 0),
-                      inertia(mu, dl::kUpperArm, 0, double(lu)));
-    capsule(ua, V(sx * S(0.1) * lu, 0, 0), V(sx * S(0.9) * lu, 0, 0), S(0.045 * s));
-    const int iua = m.add_body("UpperArm" + suf, ua);
-    Body<S> la = body(iua, elbow_knee, V(sx * lu, 0, 0), mf, V(sx * S(dl::kForearm.com) * lf, 0, 0),
-                      inertia(mf, dl::kForearm, 0, double(lf)));
+    const S sh_x = scaled(0.03), arm_x = scaled(0.175), sh_drop = scaled(0.035);
+    const double sh_mass = dl::kUpperTrunk.mass_fraction * M_ * 0.1;
+    Body sh = body(chest, JointType::Spherical, V(sx * sh_x, length(dl::kUpperTrunk) - sh_drop, 0), sh_mass,
+                   V(sx * S(0.5) * (arm_x - sh_x), 0, 0),
+                   inertia(sh_mass, Segment{0, 0, 0, 0.3, 0.3, 0.15}, 0, double(arm_x - sh_x)));
+    const int ish = m_.add_body("Shoulder" + suf, sh);
+    const S lu = length(dl::kUpperArm), lf = length(dl::kForearm), lh = length(dl::kHand);
+    const double mu = dl::kUpperArm.mass_fraction * M_, mf = dl::kForearm.mass_fraction * M_, mh = dl::kHand.mass_fraction * M_;
+    Body ua = body(ish, JointType::Spherical, V(sx * (arm_x - sh_x), 0, 0), mu, V(sx * S(dl::kUpperArm.com) * lu, 0, 0),
+                   inertia(mu, dl::kUpperArm, 0, double(lu)));
+    capsule(ua, V(sx * S(0.1) * lu, 0, 0), V(sx * S(0.9) * lu, 0, 0), scaled(0.045));
+    const int iua = m_.add_body("UpperArm" + suf, ua);
+    Body la = body(iua, elbow_knee(), V(sx * lu, 0, 0), mf, V(sx * S(dl::kForearm.com) * lf, 0, 0),
+                   inertia(mf, dl::kForearm, 0, double(lf)));
     la.axis = V::UnitY();
-    capsule(la, V(sx * S(0.1) * lf, 0, 0), V(sx * S(0.9) * lf, 0, 0), S(0.04 * s));
-    const int ila = m.add_body("LowerArm" + suf, la);
-    Body<S> hd = body(ila, JointType::Spherical, V(sx * lf, 0, 0), mh, V(sx * S(dl::kHand.com) * lh, 0, 0),
-                      inertia(mh, dl::kHand, 0, double(lh)));
-    capsule(hd, V(sx * S(0.3) * lh, 0, 0), V(sx * S(1.2) * lh, 0, 0), S(0.035 * s));
-    m.add_body("Hand" + suf, hd);
+    capsule(la, V(sx * S(0.1) * lf, 0, 0), V(sx * S(0.9) * lf, 0, 0), scaled(0.04));
+    const int ila = m_.add_body("LowerArm" + suf, la);
+    Body hd = body(ila, JointType::Spherical, V(sx * lf, 0, 0), mh, V(sx * S(dl::kHand.com) * lh, 0, 0),
+                   inertia(mh, dl::kHand, 0, double(lh)));
+    capsule(hd, V(sx * S(0.3) * lh, 0, 0), V(sx * S(1.2) * lh, 0, 0), scaled(0.035));
+    m_.add_body("Hand" + suf, hd);
   }
-  const S lfoot = L(dl::kFoot);
-  const S heel_z = S(-0.22) * lfoot, mtp_z = S(0.51) * lfoot, toe_z = S(0.78) * lfoot;
-  const S foot_hw = S(0.045 * s), toe_h = S(0.025 * s);
-  for (int side = 0; side < 2; ++side) {
+
+  // UpperLeg, LowerLeg (hinge about x), Foot (heel..metatarsophalangeal joint, sole at the floor in
+  // the reference pose; 80 % of de Leva's foot), Toes (revolute about x; 20 %).
+  void add_leg(int side) {
+    namespace dl = de_leva;
     const S sx = side == 0 ? S(1) : S(-1);
     const std::string suf = side == 0 ? "_L" : "_R";
-    const double mt = dl::kThigh.mass_fraction * M, ms = dl::kShank.mass_fraction * M;
-    const double mfoot = dl::kFoot.mass_fraction * M * 0.8, mtoe = dl::kFoot.mass_fraction * M * 0.2;
-    Body<S> th = body(0, JointType::Spherical, V(sx * hip_x, 0, 0), mt, V(0, -S(dl::kThigh.com) * l_thigh, 0),
-                      inertia(mt, dl::kThigh, 1, double(l_thigh)));
-    capsule(th, V(0, S(-0.15) * l_thigh, 0), V(0, S(-0.9) * l_thigh, 0), S(0.065 * s));
-    const int ith = m.add_body("UpperLeg" + suf, th);
-    Body<S> sk = body(ith, elbow_knee, V(0, -l_thigh, 0), ms, V(0, -S(dl::kShank.com) * l_shank, 0),
-                      inertia(ms, dl::kShank, 1, double(l_shank)));
+    const S hip_x = scaled(0.085);
+    const S lfoot = length(dl::kFoot);
+    const S heel_z = S(-0.22) * lfoot, mtp_z = S(0.51) * lfoot, toe_z = S(0.78) * lfoot;
+    const S foot_hw = scaled(0.045), toe_h = scaled(0.025);
+    const double mt = dl::kThigh.mass_fraction * M_, ms = dl::kShank.mass_fraction * M_;
+    const double mfoot = dl::kFoot.mass_fraction * M_ * 0.8, mtoe = dl::kFoot.mass_fraction * M_ * 0.2;
+    Body th = body(0, JointType::Spherical, V(sx * hip_x, 0, 0), mt, V(0, -S(dl::kThigh.com) * l_thigh_, 0),
+                   inertia(mt, dl::kThigh, 1, double(l_thigh_)));
+    capsule(th, V(0, S(-0.15) * l_thigh_, 0), V(0, S(-0.9) * l_thigh_, 0), scaled(0.065));
+    const int ith = m_.add_body("UpperLeg" + suf, th);
+    Body sk = body(ith, elbow_knee(), V(0, -l_thigh_, 0), ms, V(0, -S(dl::kShank.com) * l_shank_, 0),
+                   inertia(ms, dl::kShank, 1, double(l_shank_)));
     sk.axis = V::UnitX();
-    capsule(sk, V(0, S(-0.1) * l_shank, 0), V(0, S(-0.85) * l_shank, 0), S(0.05 * s));
-    const int isk = m.add_body("LowerLeg" + suf, sk);
-    // Foot: heel..metatarsophalangeal joint, sole at the floor in the reference pose.
-    Body<S> ft = body(isk, JointType::Spherical, V(0, -l_shank, 0), mfoot,
-                      V(0, S(-0.6) * ankle_h, heel_z + S(0.4) * lfoot), inertia(mfoot, dl::kFoot, 2, double(lfoot)));
-    box(ft, V(0, S(-0.5) * ankle_h, S(0.5) * (heel_z + mtp_z)), V(foot_hw, S(0.5) * ankle_h, S(0.5) * (mtp_z - heel_z)));
-    const int ift = m.add_body("Foot" + suf, ft);
-    Body<S> to = body(ift, JointType::Revolute, V(0, -ankle_h + toe_h, mtp_z), mtoe, V(0, S(-0.5) * toe_h, S(0.5) * (toe_z - mtp_z)),
-                      inertia(mtoe, dl::Segment{0, 0, 0, 0.3, 0.3, 0.2}, 2, double(toe_z - mtp_z)));
+    capsule(sk, V(0, S(-0.1) * l_shank_, 0), V(0, S(-0.85) * l_shank_, 0), scaled(0.05));
+    const int isk = m_.add_body("LowerLeg" + suf, sk);
+    Body ft = body(isk, JointType::Spherical, V(0, -l_shank_, 0), mfoot,
+                   V(0, S(-0.6) * ankle_h_, heel_z + S(0.4) * lfoot), inertia(mfoot, dl::kFoot, 2, double(lfoot)));
+    box(ft, V(0, S(-0.5) * ankle_h_, S(0.5) * (heel_z + mtp_z)), V(foot_hw, S(0.5) * ankle_h_, S(0.5) * (mtp_z - heel_z)));
+    const int ift = m_.add_body("Foot" + suf, ft);
+    Body to = body(ift, JointType::Revolute, V(0, -ankle_h_ + toe_h, mtp_z), mtoe, V(0, S(-0.5) * toe_h, S(0.5) * (toe_z - mtp_z)),
+                   inertia(mtoe, Segment{0, 0, 0, 0.3, 0.3, 0.2}, 2, double(toe_z - mtp_z)));
     to.axis = V::UnitX();
     box(to, V(0, S(-0.5) * toe_h, S(0.5) * (toe_z - mtp_z)), V(foot_hw, S(0.5) * toe_h, S(0.5) * (toe_z - mtp_z)));
-    m.add_body("Toes" + suf, to);
+    m_.add_body("Toes" + suf, to);
   }
-  return m;
+
+  AvatarOptions o_;
+  double s_;   // length scale, height / de Leva's reference stature
+  double M_;   // total mass (kg)
+  S H_;        // height (m)
+  // Mid-hip height in the reference pose, ankle height, leg lengths rescaled to fit between them.
+  S y_midh_, ankle_h_, l_thigh_, l_shank_;
+  dynamics::Model<S, MB, MD> m_;
+};
+
+}  // namespace detail
+
+template <class S, int MB = 24, int MD = 72>
+inline dynamics::Model<S, MB, MD> default_avatar(const AvatarOptions& o = AvatarOptions{}) {
+  return detail::AvatarBuilder<S, MB, MD>(o).build();
 }
 
 // QuestSim-style scaling (Winkler et al. 2022, sec. 3.6 / 5.4): every length (joint offsets,

@@ -18,7 +18,7 @@
 //        F = clamp(kp (p_ref - p) + kd (v_ref - v+), max_force)
 //        N = clamp(kr log(R_ref R^T) + dr (w_ref - w+), max_torque)
 //      ResidualMode::RootServo (default): applied to the root alone by the simulator's root servo
-//      (dynamics/simulator.hpp RootServo), its damping at the next velocity v+, w+ implicit inside
+//      (dynamics/root_servo.hpp), its damping at the next velocity v+, w+ implicit inside
 //      ABA exactly like the joint servos' kd (D_root = I^A + h K_r), so stiff gains on the 7 kg
 //      pelvis are stable at h = 1/120; the applied wrench never exceeds the bounds.
 //      ResidualMode::Distributed (the former default): explicit, as the external wrench field of a
@@ -199,14 +199,14 @@ class ModelBasedController {
 
   // Torques of one simulation step (written into tau: feed-forward, plus the residual wrench in
   // ResidualMode::Distributed) and, in ResidualMode::RootServo, the simulator's root servo set to
-  // the interpolated root reference (sim.root_servo, the root entries of targets() and
+  // the interpolated root reference (sim.options.root_servo, the root entries of targets() and
   // target_velocities()); the wrench it applies is known after the step: residual_applied(sim).
   // alpha in [0, 1]: how far through the current reference frame this step ends.
   ResidualWrench apply(const ModelT& m, dynamics::Simulator<S, MB, MD>& sim, S alpha, VecV& tau) noexcept {
     tau = tau_ff_;
     if (support_on_) support(m, sim.data(), support_F_, support_N_, support_c_, S(cfg_.feedforward_scale), tau);
     last_ = {};
-    auto& servo = sim.root_servo;
+    auto& servo = sim.options.root_servo;
     servo.enabled = false;
     if (!has_ref_) return last_;
     const Vec3 pr = from_p_ + alpha * (p_ref_ - from_p_);
@@ -246,7 +246,7 @@ class ModelBasedController {
   // The residual wrench of the step just taken (call after sim.step): the root servo's applied
   // wrench in ResidualMode::RootServo, the distributed resultant otherwise.
   ResidualWrench residual_applied(const dynamics::Simulator<S, MB, MD>& sim) noexcept {
-    if (cfg_.residual_mode == ResidualMode::RootServo && sim.root_servo.enabled) {
+    if (cfg_.residual_mode == ResidualMode::RootServo && sim.options.root_servo.enabled) {
       last_.force = double(sim.root_servo_force().norm());
       last_.torque = double(sim.root_servo_torque().norm());
     }

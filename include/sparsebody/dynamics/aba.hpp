@@ -1,189 +1,246 @@
-// Articulated-body algorithm (Featherstone Table 7.1) with implicit joint damping.
+// Articulated-body algorithm, Featherstone, "Rigid Body Dynamics Algorithms" (2008), Table 7.1,
+// in his symbols (body i, parent lambda(i), motion subspace S_i, all in body coordinates):
+//   pass 1, root to leaves:  v_i = X_i v_lambda + S_i qd_i,  c_i = v_i x S_i qd_i,  p^A_i = v_i x* I_i v_i
+//   pass 2, leaves to root:  U_i = I^A_i S_i,  D_i = S_i^T U_i,  u_i = tau_i - S_i^T p^A_i,
+//                            I^a_i = I^A_i - U_i D_i^-1 U_i^T,  p^a_i = p^A_i + I^a_i c_i + U_i D_i^-1 u_i,
+//                            I^A_lambda += X_i^T I^a_i X_i,  p^A_lambda += X_i^T p^a_i
+//   pass 3, root to leaves:  a'_i = X_i a_lambda + c_i,  qdd_i = D_i^-1 (u_i - U_i^T a'_i),  a_i = a'_i + S_i qdd_i
+// with gravity as the base acceleration a_0 = -g.
 //
-// Implicit damping: the servo/passive damping torque is evaluated at the next velocity,
-// tau_d = -Kd (qd + h qdd), so the dynamics become (M + h Kd) qdd = tau - C with tau holding the
-// explicit part (-Kd qd). Only ABA's joint-space term changes:
-//   D_i = S_i^T I^A_i S_i + h Kd_i,   u_i = tau_i - S_i^T p^A_i,
-// and the same D_i is used in the parent update I^a_i = I^A_i - U_i D_i^-1 U_i^T, so the result is
-// exactly the (M + h Kd)^-1 solve (this is what the CRBA test checks). Kd_i = (kd_i + damping_i) I.
+// Implicit diagonal: Data::implicit_diagonal (one entry per DoF) is added to D_i, the way
+// Pinocchio adds a joint's armature. The simulator puts h (kd + damping) there, which makes the
+// damping torque -Kd (qd + h qdd) implicit: the result is exactly (M + h Kd)^-1 (tau - C), because
+// the same D_i enters I^a_i (the CRBA oracle test checks this). On the free root (S = 1_6, no
+// parent) the 6 entries are added to I^A itself, D = I^A + diag(k), and its solve is written for
+// a = a' + qdd: (I^A + diag(k)) a = tau - p^A + diag(k) a'.
 //
-// Optional root servo damping K_r = diag(kr_w I3, kr_v I3) on the free root's 6 DoFs (a PD servo on
-// the root, e.g. a residual wrench toward a reference root, dynamics/simulator.hpp RootServo): the
-// same implicit form, D_root = I^A_root + h K_r. The root's joint force is I^A a + p^A with
-// a = qdd + a' (a' = X a_0: gravity), so (I^A + h K_r) a = tau - p^A + h K_r a'.
+// External loads (Data::fext, Data::Kext, filled by contact): f = f_ext - K_ext a enters pass 2 as
+// I^A_i = I_i + K_ext_i and p^A_i = p_i - f_ext_i.
 #pragma once
 #include "sparsebody/dynamics/kinematics.hpp"
 
 namespace sparsebody::dynamics {
 
-// Pass 1: kinematics plus the per-body velocity-product force v x* I v.
+// ---- pass 1 --------------------------------------------------------------------------------------
+
+// p_i = v_i x* I_i v_i, the velocity-product force of each body (needs v_i from forward_kinematics).
 template <class S, int MB, int MD>
-inline void aba_kinematics(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecQ& q,
-                          const typename Model<S, MB, MD>::VecV& qd, bool with_world = false) {
-  forward_kinematics(m, d, q, &qd, with_world);
+inline void velocity_product_forces(const Model<S, MB, MD>& m, Data<S, MB, MD>& d) {
   for (int i = 0; i < m.nb; ++i) d.bias[i] = cross_force(d.v[i], mul6v(m.bodies[i].I, d.v[i]));
 }
 
-// Passes 2 and 3, after aba_kinematics. h_damp = h for implicit damping, 0 for explicit.
-// When include_kd is false only the passive damping is implicit (torque-driven use).
-// root_damping: K_r's diagonal (angular then linear, free-root layout), nullptr for none.
-// Returns false when a joint-space term D_i is not positive (degenerate model or NaN).
+// X_i, v_i, c_i (forward_kinematics; world poses only when asked) and p_i.
 template <class S, int MB, int MD>
-inline bool aba_solve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
-                     typename Model<S, MB, MD>::VecV& qdd, S h_damp, bool include_kd = true,
-                     const Vec6<S>* root_damping = nullptr) {
-  bool ok = true;
+inline void aba_forward_pass(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecQ& q,
+                             const typename Model<S, MB, MD>::VecV& qd, bool with_world = false) {
+  forward_kinematics(m, d, q, &qd, with_world);
+  velocity_product_forces(m, d);
+}
+
+// ---- pass 2, one function per joint type -----------------------------------------------------------
+// Each writes U_i, D_i^-1, u_i into d and, when body i has a parent, I^a_i and p^a_i. False when
+// D_i is not positive (degenerate model or NaN).
+
+// Free root, S = 1_6: U = I^A, D = I^A + diag(k). Only its Cholesky factor is kept (pass 3 solves
+// with it); a free joint has no parent (Model validates this).
+template <class S, int MB, int MD>
+inline bool free_root_articulated(const Body<S>& b, int i, Data<S, MB, MD>& d) {
+  Mat6<S> D = d.IA[i];
+  for (int r = 0; r < 6; ++r) D(r, r) += d.implicit_diagonal(b.v_index + r);
+  d.u[i].setZero();
+  return cholesky_factor6(D, d.root_L);
+}
+
+// Spherical, S = [1_3; 0]: U = I^A S is the first three columns of I^A (read in place, in pass 3
+// too: I^A_i is final once body i is reached), D the top-left 3x3 block of I^A plus diag(k).
+template <class S, int MB, int MD>
+inline bool spherical_articulated(const Body<S>& b, int i, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
+                                  Mat6<S>& Ia, Vec6<S>& pa) {
+  const Mat6<S>& IA = d.IA[i];
+  const Vec6<S>& pA = d.pA[i];
+  const int k = b.v_index;
+  Mat3<S> D;
+  SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c)
+    SPARSEBODY_UNROLL for (int r = 0; r < 3; ++r) D(r, c) = IA(r, c);
+  D(0, 0) += d.implicit_diagonal(k); D(1, 1) += d.implicit_diagonal(k + 1); D(2, 2) += d.implicit_diagonal(k + 2);
+  const Mat3<S> Dinv = inverse_sym3(D);
+  d.Dinv[i] = Dinv;
+  const bool ok = D(0, 0) > S(0) && Dinv.allFinite();
+  const S u0 = tau(k) - pA(0), u1 = tau(k + 1) - pA(1), u2 = tau(k + 2) - pA(2);  // u = tau - S^T p^A
+  d.u[i] = Vec3<S>(u0, u1, u2);
+  if (b.parent < 0) return ok;
+  // I^a = I^A - U D^-1 U^T, symmetric: lower triangle, mirrored; p^a = p^A + I^a c + U D^-1 u.
+  S UD[6][3];  // U D^-1
+  SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r)
+    SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c)
+      UD[r][c] = IA(r, 0) * Dinv(0, c) + IA(r, 1) * Dinv(1, c) + IA(r, 2) * Dinv(2, c);
+  SPARSEBODY_UNROLL for (int c = 0; c < 6; ++c)
+    SPARSEBODY_UNROLL for (int r = c; r < 6; ++r) {
+      const S v = IA(r, c) - (UD[r][0] * IA(c, 0) + UD[r][1] * IA(c, 1) + UD[r][2] * IA(c, 2));
+      Ia(r, c) = v;
+      Ia(c, r) = v;
+    }
+  const Vec6<S> Iac = mul6v(Ia, d.c[i]);
+  SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r)
+    pa(r) = pA(r) + Iac(r) + (UD[r][0] * u0 + UD[r][1] * u1 + UD[r][2] * u2);
+  return ok;
+}
+
+// Revolute, S = [axis; 0]: U = I^A S (stored, column 0 of d.U), D = S^T U + k, a scalar.
+template <class S, int MB, int MD>
+inline bool revolute_articulated(const Body<S>& b, int i, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
+                                 Mat6<S>& Ia, Vec6<S>& pa) {
+  const Mat6<S>& IA = d.IA[i];
+  const Vec6<S>& pA = d.pA[i];
+  const S ax = b.axis.x(), ay = b.axis.y(), az = b.axis.z();
+  S Uc[6];
+  for (int r = 0; r < 6; ++r) Uc[r] = IA(r, 0) * ax + IA(r, 1) * ay + IA(r, 2) * az;
+  const S D = ax * Uc[0] + ay * Uc[1] + az * Uc[2] + d.implicit_diagonal(b.v_index);
+  const bool ok = D > S(0);
+  const S Dinv = S(1) / D;
+  for (int r = 0; r < 6; ++r) d.U[i](r, 0) = Uc[r];
+  d.Dinv[i](0, 0) = Dinv;
+  const S u = tau(b.v_index) - (ax * pA(0) + ay * pA(1) + az * pA(2));
+  d.u[i](0) = u;
+  if (b.parent < 0) return ok;
+  S UD[6];  // U D^-1
+  for (int r = 0; r < 6; ++r) UD[r] = Uc[r] * Dinv;
+  SPARSEBODY_UNROLL for (int c = 0; c < 6; ++c)
+    SPARSEBODY_UNROLL for (int r = c; r < 6; ++r) {
+      const S v = IA(r, c) - UD[r] * Uc[c];
+      Ia(r, c) = v;
+      Ia(c, r) = v;
+    }
+  const Vec6<S> Iac = mul6v(Ia, d.c[i]);
+  for (int r = 0; r < 6; ++r) pa(r) = pA(r) + Iac(r) + UD[r] * u;
+  return ok;
+}
+
+// Fixed, S empty: I^a = I^A, p^a = p^A + I^A c.
+template <class S, int MB, int MD>
+inline void fixed_articulated(int i, const Data<S, MB, MD>& d, Mat6<S>& Ia, Vec6<S>& pa) {
+  Ia = d.IA[i];
+  pa = d.pA[i] + mul6v(d.IA[i], d.c[i]);
+}
+
+// Pass 2: I^A_i and p^A_i from the leaves to the root, after pass 1 (p_i in d.bias).
+template <class S, int MB, int MD>
+inline bool aba_backward_pass(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau) {
   for (int i = 0; i < m.nb; ++i) {
     d.IA[i] = m.bodies[i].I;
     d.pA[i] = d.bias[i];
-    if (d.has_ext) {  // linearly implicit external load f = fext - Kext a  =>  I^A += Kext, p^A -= fext
+    if (d.has_ext) {  // f = f_ext - K_ext a  =>  I^A += K_ext, p^A -= f_ext
       d.IA[i] += d.Kext[i];
       d.pA[i] -= d.fext[i];
     }
   }
+  bool ok = true;
   for (int i = m.nb - 1; i >= 0; --i) {
     const Body<S>& b = m.bodies[i];
-    const S kdamp = h_damp * ((include_kd ? b.kd : S(0)) + b.damping);
-    const Mat6<S>& IA = d.IA[i];
-    const Vec6<S>& pA = d.pA[i];
-    Mat6<S> Ia;   // I^a_i, articulated inertia passed to the parent
-    Vec6<S> pa;   // p^a_i
+    Mat6<S> Ia;  // I^a_i, passed to the parent
+    Vec6<S> pa;  // p^a_i
     switch (b.joint) {
-      case JointType::Free: {  // root only (validated): solved in pass 3
-        if (root_damping) {
-          Mat6<S> D = IA;
-          for (int r = 0; r < 6; ++r) D(r, r) += h_damp * (*root_damping)(r);
-          if (!cholesky_factor6(D, d.root_L)) ok = false;
-        } else if (!cholesky_factor6(IA, d.root_L)) {
-          ok = false;
-        }
-        d.u[i].setZero();
-        continue;
-      }
-      case JointType::Spherical: {
-        // S = [I3; 0]: U = I^A S is the first three columns of I^A (read in place, also in pass 3:
-        // I^A_i is final once body i is reached), D the top-left 3x3 block.
-        Mat3<S> D;
-        SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c)
-          SPARSEBODY_UNROLL for (int r = 0; r < 3; ++r) D(r, c) = IA(r, c);
-        D(0, 0) += kdamp; D(1, 1) += kdamp; D(2, 2) += kdamp;
-        const Mat3<S> Dinv = inverse_sym3(D);
-        d.Dinv[i] = Dinv;
-        if (!(D(0, 0) > S(0)) || !Dinv.allFinite()) ok = false;
-        const int k = b.v_index;
-        const S u0 = tau(k) - pA(0), u1 = tau(k + 1) - pA(1), u2 = tau(k + 2) - pA(2);
-        d.u[i] = Vec3<S>(u0, u1, u2);
-        if (b.parent < 0) continue;
-        // I^a = I^A - U D^-1 U^T, symmetric: lower triangle, mirrored; p^a = p^A + I^a c + U D^-1 u.
-        S UD[6][3];
-        SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r)
-          SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c)
-            UD[r][c] = IA(r, 0) * Dinv(0, c) + IA(r, 1) * Dinv(1, c) + IA(r, 2) * Dinv(2, c);
-        SPARSEBODY_UNROLL for (int c = 0; c < 6; ++c)
-          SPARSEBODY_UNROLL for (int r = c; r < 6; ++r) {
-            const S v = IA(r, c) - (UD[r][0] * IA(c, 0) + UD[r][1] * IA(c, 1) + UD[r][2] * IA(c, 2));
-            Ia(r, c) = v;
-            Ia(c, r) = v;
-          }
-        const Vec6<S> Iac = mul6v(Ia, d.c[i]);
-        SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r)
-          pa(r) = pA(r) + Iac(r) + (UD[r][0] * u0 + UD[r][1] * u1 + UD[r][2] * u2);
-        break;
-      }
-      case JointType::Revolute: {
-        const S ax = b.axis.x(), ay = b.axis.y(), az = b.axis.z();
-        S Uc[6];
-        for (int r = 0; r < 6; ++r) Uc[r] = IA(r, 0) * ax + IA(r, 1) * ay + IA(r, 2) * az;
-        const S D = ax * Uc[0] + ay * Uc[1] + az * Uc[2] + kdamp;
-        if (!(D > S(0))) ok = false;
-        const S Dinv = S(1) / D;
-        for (int r = 0; r < 6; ++r) d.U[i](r, 0) = Uc[r];
-        d.Dinv[i](0, 0) = Dinv;
-        const S u = tau(b.v_index) - (ax * pA(0) + ay * pA(1) + az * pA(2));
-        d.u[i](0) = u;
-        if (b.parent < 0) continue;
-        S UD[6];
-        for (int r = 0; r < 6; ++r) UD[r] = Uc[r] * Dinv;
-        SPARSEBODY_UNROLL for (int c = 0; c < 6; ++c)
-          SPARSEBODY_UNROLL for (int r = c; r < 6; ++r) {
-            const S v = IA(r, c) - UD[r] * Uc[c];
-            Ia(r, c) = v;
-            Ia(c, r) = v;
-          }
-        const Vec6<S> Iac = mul6v(Ia, d.c[i]);
-        for (int r = 0; r < 6; ++r) pa(r) = pA(r) + Iac(r) + UD[r] * u;
-        break;
-      }
+      case JointType::Free: ok = free_root_articulated(b, i, d) && ok; continue;
+      case JointType::Spherical: ok = spherical_articulated(b, i, d, tau, Ia, pa) && ok; break;
+      case JointType::Revolute: ok = revolute_articulated(b, i, d, tau, Ia, pa) && ok; break;
       case JointType::Fixed:
       default:
-        if (b.parent < 0) continue;
-        Ia = IA;
-        pa = pA + mul6v(IA, d.c[i]);
+        if (b.parent >= 0) fixed_articulated(i, d, Ia, pa);
         break;
     }
-    add_transformed_inertia(d.X[i], Ia, d.IA[b.parent]);        // I^A_lambda += X^T I^a X
-    d.pA[b.parent] += d.X[i].apply_transpose_force(pa);          // p^A_lambda += X^T p^a
+    if (b.parent < 0) continue;
+    add_transformed_inertia(d.X[i], Ia, d.IA[b.parent]);  // I^A_lambda += X^T I^a X
+    d.pA[b.parent] += d.X[i].apply_transpose_force(pa);    // p^A_lambda += X^T p^a
   }
+  return ok;
+}
+
+// ---- pass 3, one function per joint type -----------------------------------------------------------
+// Each takes a'_i, writes qdd_i and returns a_i in ap.
+
+// Free root: a = (I^A + diag(k))^-1 (tau - p^A + diag(k) a'), qdd = a - a'.
+template <class S, int MB, int MD>
+inline void free_root_acceleration(const Body<S>& b, int i, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
+                                   Vec6<S>& ap, typename Model<S, MB, MD>::VecV& qdd) {
+  const int k = b.v_index;
+  Vec6<S> x;
+  for (int r = 0; r < 6; ++r) x(r) = tau(k + r) - d.pA[i](r) + d.implicit_diagonal(k + r) * ap(r);
+  cholesky_solve6(d.root_L, x);
+  for (int r = 0; r < 6; ++r) qdd(k + r) = x(r) - ap(r);
+  ap = x;
+}
+
+// Spherical: qdd = D^-1 (u - U^T a') with U the first three columns of I^A; a = a' + [qdd; 0].
+template <class S, int MB, int MD>
+inline void spherical_acceleration(const Body<S>& b, int i, const Data<S, MB, MD>& d, Vec6<S>& ap,
+                                   typename Model<S, MB, MD>::VecV& qdd) {
+  const Mat6<S>& U = d.IA[i];
+  const Mat3<S>& Dinv = d.Dinv[i];
+  S y[3];  // u - U^T a'
+  for (int c = 0; c < 3; ++c)
+    y[c] = d.u[i](c) - (U(0, c) * ap(0) + U(1, c) * ap(1) + U(2, c) * ap(2) + U(3, c) * ap(3) + U(4, c) * ap(4) +
+                        U(5, c) * ap(5));
+  for (int r = 0; r < 3; ++r) {
+    const S x = Dinv(r, 0) * y[0] + Dinv(r, 1) * y[1] + Dinv(r, 2) * y[2];
+    qdd(b.v_index + r) = x;
+    ap(r) += x;
+  }
+}
+
+// Revolute: qdd = D^-1 (u - U^T a'); a = a' + [axis qdd; 0].
+template <class S, int MB, int MD>
+inline void revolute_acceleration(const Body<S>& b, int i, const Data<S, MB, MD>& d, Vec6<S>& ap,
+                                  typename Model<S, MB, MD>::VecV& qdd) {
+  const Mat63<S>& U = d.U[i];
+  const S x = d.Dinv[i](0, 0) * (d.u[i](0) - (U(0, 0) * ap(0) + U(1, 0) * ap(1) + U(2, 0) * ap(2) + U(3, 0) * ap(3) +
+                                              U(4, 0) * ap(4) + U(5, 0) * ap(5)));
+  qdd(b.v_index) = x;
+  ap(0) += b.axis.x() * x;
+  ap(1) += b.axis.y() * x;
+  ap(2) += b.axis.z() * x;
+}
+
+// Pass 3: a_i and qdd from the root to the leaves, after pass 2.
+template <class S, int MB, int MD>
+inline void aba_acceleration_pass(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
+                                  typename Model<S, MB, MD>::VecV& qdd) {
   Vec6<S> a0 = Vec6<S>::Zero();
   a0.template tail<3>() = -m.gravity;
   qdd.resize(m.nv);
   for (int i = 0; i < m.nb; ++i) {
     const Body<S>& b = m.bodies[i];
-    Vec6<S> ap = d.X[i].apply(b.parent < 0 ? a0 : d.a[b.parent]);  // a'_i = X a_lambda + c_i
+    Vec6<S> ap = d.X[i].apply(b.parent < 0 ? a0 : d.a[b.parent]);  // a'_i = X_i a_lambda + c_i
     for (int r = 0; r < 6; ++r) ap(r) += d.c[i](r);
-    const int k = b.v_index;
     switch (b.joint) {
-      case JointType::Free: {  // S = I: qdd = (I^A + h K_r)^-1 (tau - p^A + h K_r a') - a'
-        Vec6<S> x;
-        for (int r = 0; r < 6; ++r) x(r) = tau(k + r) - d.pA[i](r);
-        if (root_damping)
-          for (int r = 0; r < 6; ++r) x(r) += h_damp * (*root_damping)(r) * ap(r);
-        cholesky_solve6(d.root_L, x);
-        for (int r = 0; r < 6; ++r) qdd(k + r) = x(r) - ap(r);
-        d.a[i] = x;
-        break;
-      }
-      case JointType::Spherical: {
-        const Mat6<S>& U = d.IA[i];  // U = I^A S = first three columns
-        const Mat3<S>& Dinv = d.Dinv[i];
-        S y[3];
-        for (int c = 0; c < 3; ++c)
-          y[c] = d.u[i](c) - (U(0, c) * ap(0) + U(1, c) * ap(1) + U(2, c) * ap(2) + U(3, c) * ap(3) +
-                              U(4, c) * ap(4) + U(5, c) * ap(5));
-        for (int r = 0; r < 3; ++r) {
-          const S x = Dinv(r, 0) * y[0] + Dinv(r, 1) * y[1] + Dinv(r, 2) * y[2];
-          qdd(k + r) = x;
-          ap(r) += x;
-        }
-        d.a[i] = ap;
-        break;
-      }
-      case JointType::Revolute: {
-        const Mat63<S>& U = d.U[i];
-        const S x = d.Dinv[i](0, 0) * (d.u[i](0) - (U(0, 0) * ap(0) + U(1, 0) * ap(1) + U(2, 0) * ap(2) +
-                                                    U(3, 0) * ap(3) + U(4, 0) * ap(4) + U(5, 0) * ap(5)));
-        qdd(k) = x;
-        ap(0) += b.axis.x() * x;
-        ap(1) += b.axis.y() * x;
-        ap(2) += b.axis.z() * x;
-        d.a[i] = ap;
-        break;
-      }
+      case JointType::Free: free_root_acceleration(b, i, d, tau, ap, qdd); break;
+      case JointType::Spherical: spherical_acceleration(b, i, d, ap, qdd); break;
+      case JointType::Revolute: revolute_acceleration(b, i, d, ap, qdd); break;
       case JointType::Fixed:
-      default: d.a[i] = ap; break;
+      default: break;
     }
+    d.a[i] = ap;
   }
+}
+
+// ---- the algorithm --------------------------------------------------------------------------------
+
+// Passes 2 and 3 on the kinematics and p_i already in d: what a contact solve repeats with new
+// external loads. False when a D_i is not positive (degenerate model or NaN).
+template <class S, int MB, int MD>
+inline bool aba_solve(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
+                      typename Model<S, MB, MD>::VecV& qdd) {
+  const bool ok = aba_backward_pass(m, d, tau);
+  aba_acceleration_pass(m, d, tau, qdd);
   return ok;
 }
 
-// Forward dynamics qdd = (M + h Kd)^-1 (tau - C(q, qd) + J^T f_ext) (Kd with K_r on the root DoFs).
+// Forward dynamics qdd = (M + diag(d.implicit_diagonal))^-1 (tau - C(q, qd) + J^T f_ext).
 template <class S, int MB, int MD>
 inline bool aba(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecQ& q,
                 const typename Model<S, MB, MD>::VecV& qd, const typename Model<S, MB, MD>::VecV& tau,
-                typename Model<S, MB, MD>::VecV& qdd, S h_damp = S(0), bool include_kd = true,
-                const Vec6<S>* root_damping = nullptr) {
-  aba_kinematics(m, d, q, qd);
-  return aba_solve(m, d, tau, qdd, h_damp, include_kd, root_damping);
+                typename Model<S, MB, MD>::VecV& qdd) {
+  aba_forward_pass(m, d, q, qd);
+  return aba_solve(m, d, tau, qdd);
 }
 
 }  // namespace sparsebody::dynamics

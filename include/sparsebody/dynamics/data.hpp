@@ -23,7 +23,7 @@ struct Data {
   std::array<Mat6<S>, MaxBodies> IA{};          // articulated inertia I^A
   std::array<Vec6<S>, MaxBodies> pA{};          // articulated bias force p^A
   std::array<Mat63<S>, MaxBodies> U{};          // U_i = I^A_i S_i (revolute: column 0; spherical: read from IA)
-  std::array<Mat3<S>, MaxBodies> Dinv{};        // D_i^-1, D_i = S^T I^A S + h (kd + damping)
+  std::array<Mat3<S>, MaxBodies> Dinv{};        // D_i^-1, D_i = S_i^T I^A_i S_i + diag(implicit_diagonal_i)
   std::array<Vec3<S>, MaxBodies> u{};           // u_i = tau_i - S_i^T p^A_i
   Mat6<S> root_L{};                             // Cholesky factor (lower) of the free root's I^A
   // External loads per body (body coordinates), filled by contact: a force f_ext and an
@@ -31,16 +31,18 @@ struct Data {
   std::array<Vec6<S>, MaxBodies> fext{};
   std::array<Mat6<S>, MaxBodies> Kext{};
   bool has_ext = false;
-  typename M::MatV Mass;                        // CRBA output
-  std::array<Mat6<S>, MaxBodies> Ic{};          // CRBA composite inertia
+  // Per-DoF term ABA adds to D_i (the free root: to its 6x6 I^A), like Pinocchio's armature: the
+  // simulator writes h (kd + damping) per joint DoF and h K_r on the free root (implicit damping:
+  // implicit_damping_diagonal in pd_servo.hpp, and the root servo). Zero: plain forward dynamics.
+  typename M::VecV implicit_diagonal;
   typename M::VecV qdd, tau;
 
   Data() = default;
   explicit Data(const M& m) { resize(m); }
   void resize(const M& m) {
-    Mass.setZero(m.nv, m.nv);
     qdd.setZero(m.nv);
     tau.setZero(m.nv);
+    implicit_diagonal.setZero(m.nv);
     clear_external();
   }
   void clear_external() {

@@ -76,9 +76,12 @@ struct Model {
   std::array<ContactPoint<S>, kMaxPoints> points{};
   int num_points = 0;
 
-  // Appends a body; returns its index or -1 when a compile-time bound would be exceeded.
+  // Appends a body; returns its index, or -1 when a compile-time bound would be exceeded or the
+  // body is a free joint that is not attached to the world or not the only one (ABA and the
+  // simulator treat the free joint as the one floating base).
   int add_body(const std::string& body_name, const Body<S>& b) {
     if (nb >= MaxBodies || nv + joint_nv(b.joint) > MaxDofs) return -1;
+    if (b.joint == JointType::Free && (b.parent >= 0 || root_body_ >= 0)) return -1;
     names[nb] = body_name;
     bodies[nb] = b;
     ++nb;
@@ -90,6 +93,9 @@ struct Model {
       if (names[i] == body_name) return i;
     return -1;
   }
+  // The floating base: the body with the free joint (attached to the world, at most one: checked
+  // by add_body, recorded by finalize), or -1 when the tree is fixed to the world.
+  int root_body() const { return root_body_; }
   int nv_of(int i) const { return joint_nv(bodies[i].joint); }
   int nq_of(int i) const { return joint_nq(bodies[i].joint); }
   S total_mass() const {
@@ -102,8 +108,10 @@ struct Model {
   void finalize() {
     nq = nv = 0;
     num_points = 0;
+    root_body_ = -1;
     for (int i = 0; i < nb; ++i) {
       Body<S>& b = bodies[i];
+      if (b.joint == JointType::Free && b.parent < 0 && root_body_ < 0) root_body_ = i;
       b.q_index = nq;
       b.v_index = nv;
       nq += joint_nq(b.joint);
@@ -162,6 +170,7 @@ struct Model {
   }
 
  private:
+  int root_body_ = -1;
   void add_point(int body, const Vec3<S>& p, S r) {
     if (num_points >= kMaxPoints) return;
     points[num_points++] = ContactPoint<S>{body, p, r};

@@ -88,6 +88,142 @@ inline void check_keys(const JsonCtx& c, const nlohmann::json& o, const std::set
     }
 }
 
+// parent: null only for the first body, else the name of an earlier body.
+template <class S, int MB, int MD>
+int json_parent(const JsonCtx& bc, const nlohmann::json& o, const Model<S, MB, MD>& m, size_t i) {
+  if (!o.contains("parent") || o["parent"].is_null()) {
+    if (i != 0) bc.fail("parent", "missing/null: only the first body may be attached to the world");
+    return -1;
+  }
+  if (!o["parent"].is_string()) bc.fail("parent", "expected the name of an earlier body or null");
+  const int parent = m.find(o["parent"].get<std::string>());
+  if (parent < 0)
+    bc.fail("parent", "'" + o["parent"].get<std::string>() + "' is not an earlier body (parents must come first)");
+  return parent;
+}
+
+// joint (free only at the root) and, for revolute joints only, its axis.
+template <class S>
+void json_joint(const JsonCtx& bc, const nlohmann::json& o, Body<S>& b) {
+  if (!o.contains("joint") || !o["joint"].is_string()) bc.fail("joint", "missing (expected free, spherical, revolute or fixed)");
+  const std::string jt = o["joint"].get<std::string>();
+  if (jt == "free") b.joint = JointType::Free;
+  else if (jt == "spherical") b.joint = JointType::Spherical;
+  else if (jt == "revolute") b.joint = JointType::Revolute;
+  else if (jt == "fixed") b.joint = JointType::Fixed;
+  else bc.fail("joint", "'" + jt + "' is not a joint type (expected free, spherical, revolute or fixed)");
+  if (b.joint == JointType::Free && b.parent != -1) bc.fail("joint", "a free joint is only allowed on the root body");
+  if (b.joint == JointType::Revolute) {
+    const Eigen::Vector3d ax = json_vec<3>(bc, o, "axis", Eigen::Vector3d::Zero(), true);
+    if (ax.norm() < 1e-9) bc.fail("axis", "expected a non-zero axis");
+    b.axis = ax.normalized().template cast<S>();
+  } else if (o.contains("axis")) {
+    bc.fail("axis", "only revolute joints have an axis");
+  }
+}
+
+// mass > 0, com, and an inertia about the com that is positive definite and physical.
+template <class S>
+void json_inertia(const JsonCtx& bc, const nlohmann::json& o, Body<S>& b) {
+  const double mass = json_number(bc, o, "mass", 0, true);
+  if (!(mass > 0)) bc.fail("mass", "expected a positive mass in kg, got " + o["mass"].dump());
+  b.mass = S(mass);
+  b.com = json_vec<3>(bc, o, "com", Eigen::Vector3d::Zero(), false).template cast<S>();
+  const Eigen::Matrix<double, 6, 1> in = json_vec<6>(bc, o, "inertia", Eigen::Matrix<double, 6, 1>::Zero(), true);
+  Eigen::Matrix3d I;
+  I << in(0), in(3), in(4), in(3), in(1), in(5), in(4), in(5), in(2);
+  const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(I).eigenvalues();
+  if (!(ev(0) > 0)) bc.fail("inertia", "[ixx, iyy, izz, ixy, ixz, iyz] is not positive definite");
+  if (ev(0) + ev(1) < ev(2) * (1 - 1e-9))
+    bc.fail("inertia", "principal moments violate the triangle inequality (not a physical rigid body)");
+  b.inertia = I.template cast<S>();
+}
+
+// Servo gains, damping, torque limit (all >= 0) and the optional ordered limits.
+template <class S>
+void json_servo(const JsonCtx& bc, const nlohmann::json& o, Body<S>& b) {
+  b.kp = S(json_number(bc, o, "kp", 0, false, true));
+  b.kd = S(json_number(bc, o, "kd", 0, false, true));
+  b.damping = S(json_number(bc, o, "damping", 0, false, true));
+  b.torque_limit = S(json_number(bc, o, "torque_limit", 0, false, true));
+  if (o.contains("limits")) {
+    const Eigen::Vector2d l = json_vec<2>(bc, o, "limits", Eigen::Vector2d::Zero(), true);
+    if (l(0) > l(1)) bc.fail("limits", "expected [lower, upper] with lower <= upper");
+    b.lower = S(l(0)); b.upper = S(l(1)); b.limited = true;
+  }
+}
+
+// One shape: sphere {pos, radius}, capsule {from, to, radius} or box {pos, quat, half_extents}.
+template <class S>
+void json_shape(const JsonCtx& sc, const nlohmann::json& so, Shape<S>& s) {
+  const std::string t = so["type"].get<std::string>();
+  if (t == "sphere") {
+    check_keys(sc, so, {"type", "pos", "radius"});
+    s.type = Shape<S>::Type::Sphere;
+    s.pos = json_vec<3>(sc, so, "pos", Eigen::Vector3d::Zero(), false).template cast<S>();
+    s.radius = S(json_number(sc, so, "radius", 0, true));
+  } else if (t == "capsule") {
+    check_keys(sc, so, {"type", "from", "to", "radius"});
+    s.type = Shape<S>::Type::Capsule;
+    s.pos = json_vec<3>(sc, so, "from", Eigen::Vector3d::Zero(), true).template cast<S>();
+    s.pos2 = json_vec<3>(sc, so, "to", Eigen::Vector3d::Zero(), true).template cast<S>();
+    s.radius = S(json_number(sc, so, "radius", 0, true));
+  } else if (t == "box") {
+    check_keys(sc, so, {"type", "pos", "quat", "half_extents"});
+    s.type = Shape<S>::Type::Box;
+    s.pos = json_vec<3>(sc, so, "pos", Eigen::Vector3d::Zero(), false).template cast<S>();
+    s.rot = json_quat(sc, so, "quat").template cast<S>();
+    const Eigen::Vector3d h = json_vec<3>(sc, so, "half_extents", Eigen::Vector3d::Zero(), true);
+    if (!(h.minCoeff() > 0)) sc.fail("half_extents", "expected three positive half extents");
+    s.half = h.template cast<S>();
+    s.radius = S(1);  // unused; passes the radius check below
+  } else {
+    sc.fail("type", "'" + t + "' is not a shape type (expected sphere, capsule or box)");
+  }
+  if (!(s.radius > S(0))) sc.fail("radius", "expected a positive radius");
+  if (s.type == Shape<S>::Type::Box) s.radius = S(0);
+}
+
+template <class S>
+void json_shapes(const JsonCtx& bc, const std::string& source, const nlohmann::json& o, Body<S>& b) {
+  if (!o.contains("shapes")) return;
+  const auto& sh = o["shapes"];
+  if (!sh.is_array()) bc.fail("shapes", "expected an array");
+  if (int(sh.size()) > Body<S>::kMaxShapes) bc.fail("shapes", "at most " + std::to_string(Body<S>::kMaxShapes) + " shapes per body");
+  for (size_t k = 0; k < sh.size(); ++k) {
+    JsonCtx sc{source, bc.where + " shapes[" + std::to_string(k) + "]"};
+    const auto& so = sh[k];
+    if (!so.is_object() || !so.contains("type") || !so["type"].is_string())
+      sc.fail("type", "expected an object with a 'type' (sphere, capsule or box)");
+    json_shape(sc, so, b.shapes[b.num_shapes++]);
+  }
+}
+
+// Body i of the document, validated against the bodies already in m; nv counts the DoFs so far.
+template <class S, int MB, int MD>
+void json_add_body(const std::string& source, const nlohmann::json& o, size_t i, Model<S, MB, MD>& m, int& nv) {
+  JsonCtx bc{source, "bodies[" + std::to_string(i) + "]"};
+  if (!o.is_object()) bc.fail("", "expected an object");
+  if (!o.contains("name") || !o["name"].is_string() || o["name"].get<std::string>().empty())
+    bc.fail("name", "missing or not a non-empty string");
+  const std::string name = o["name"].get<std::string>();
+  bc.where += " '" + name + "'";
+  check_keys(bc, o, {"name", "parent", "joint", "axis", "pos", "quat", "mass", "com", "inertia", "kp", "kd",
+                     "damping", "torque_limit", "limits", "shapes"});
+  if (m.find(name) >= 0) bc.fail("name", "duplicate body name");
+  Body<S> b;
+  b.parent = json_parent(bc, o, m, i);
+  json_joint(bc, o, b);
+  nv += joint_nv(b.joint);
+  if (nv > MD) bc.fail("joint", "total DoF " + std::to_string(nv) + " exceeds this Model's compile-time bound MaxDofs = " + std::to_string(MD));
+  b.pos = json_vec<3>(bc, o, "pos", Eigen::Vector3d::Zero(), false).template cast<S>();
+  b.rot = json_quat(bc, o, "quat").template cast<S>();
+  json_inertia(bc, o, b);
+  json_servo(bc, o, b);
+  json_shapes(bc, source, o, b);
+  m.add_body(name, b);
+}
+
 }  // namespace detail
 
 // Parses and validates a model; `source` names the document in errors (usually its path).
@@ -116,110 +252,7 @@ Model<S, MB, MD> parse_model_json(const std::string& text, const std::string& so
     c.fail("bodies", std::to_string(bodies.size()) + " bodies exceed this Model's compile-time bound MaxBodies = " +
                          std::to_string(MB));
   int nv = 0;
-  for (size_t i = 0; i < bodies.size(); ++i) {
-    const auto& o = bodies[i];
-    JsonCtx bc{source, "bodies[" + std::to_string(i) + "]"};
-    if (!o.is_object()) bc.fail("", "expected an object");
-    if (!o.contains("name") || !o["name"].is_string() || o["name"].get<std::string>().empty())
-      bc.fail("name", "missing or not a non-empty string");
-    const std::string name = o["name"].get<std::string>();
-    bc.where += " '" + name + "'";
-    detail::check_keys(bc, o, {"name", "parent", "joint", "axis", "pos", "quat", "mass", "com", "inertia", "kp", "kd",
-                              "damping", "torque_limit", "limits", "shapes"});
-    if (m.find(name) >= 0) bc.fail("name", "duplicate body name");
-    Body<S> b;
-    // parent
-    if (!o.contains("parent") || o["parent"].is_null()) {
-      if (i != 0) bc.fail("parent", "missing/null: only the first body may be attached to the world");
-      b.parent = -1;
-    } else {
-      if (!o["parent"].is_string()) bc.fail("parent", "expected the name of an earlier body or null");
-      b.parent = m.find(o["parent"].get<std::string>());
-      if (b.parent < 0)
-        bc.fail("parent", "'" + o["parent"].get<std::string>() + "' is not an earlier body (parents must come first)");
-    }
-    // joint
-    if (!o.contains("joint") || !o["joint"].is_string()) bc.fail("joint", "missing (expected free, spherical, revolute or fixed)");
-    const std::string jt = o["joint"].get<std::string>();
-    if (jt == "free") b.joint = JointType::Free;
-    else if (jt == "spherical") b.joint = JointType::Spherical;
-    else if (jt == "revolute") b.joint = JointType::Revolute;
-    else if (jt == "fixed") b.joint = JointType::Fixed;
-    else bc.fail("joint", "'" + jt + "' is not a joint type (expected free, spherical, revolute or fixed)");
-    if (b.joint == JointType::Free && b.parent != -1) bc.fail("joint", "a free joint is only allowed on the root body");
-    if (b.joint == JointType::Revolute) {
-      const Eigen::Vector3d ax = detail::json_vec<3>(bc, o, "axis", Eigen::Vector3d::Zero(), true);
-      if (ax.norm() < 1e-9) bc.fail("axis", "expected a non-zero axis");
-      b.axis = ax.normalized().template cast<S>();
-    } else if (o.contains("axis")) {
-      bc.fail("axis", "only revolute joints have an axis");
-    }
-    nv += joint_nv(b.joint);
-    if (nv > MD) bc.fail("joint", "total DoF " + std::to_string(nv) + " exceeds this Model's compile-time bound MaxDofs = " + std::to_string(MD));
-    b.pos = detail::json_vec<3>(bc, o, "pos", Eigen::Vector3d::Zero(), false).template cast<S>();
-    b.rot = detail::json_quat(bc, o, "quat").template cast<S>();
-    // inertia
-    const double mass = detail::json_number(bc, o, "mass", 0, true);
-    if (!(mass > 0)) bc.fail("mass", "expected a positive mass in kg, got " + o["mass"].dump());
-    b.mass = S(mass);
-    b.com = detail::json_vec<3>(bc, o, "com", Eigen::Vector3d::Zero(), false).template cast<S>();
-    const Eigen::Matrix<double, 6, 1> in = detail::json_vec<6>(bc, o, "inertia", Eigen::Matrix<double, 6, 1>::Zero(), true);
-    Eigen::Matrix3d I;
-    I << in(0), in(3), in(4), in(3), in(1), in(5), in(4), in(5), in(2);
-    const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(I).eigenvalues();
-    if (!(ev(0) > 0)) bc.fail("inertia", "[ixx, iyy, izz, ixy, ixz, iyz] is not positive definite");
-    if (ev(0) + ev(1) < ev(2) * (1 - 1e-9))
-      bc.fail("inertia", "principal moments violate the triangle inequality (not a physical rigid body)");
-    b.inertia = I.template cast<S>();
-    b.kp = S(detail::json_number(bc, o, "kp", 0, false, true));
-    b.kd = S(detail::json_number(bc, o, "kd", 0, false, true));
-    b.damping = S(detail::json_number(bc, o, "damping", 0, false, true));
-    b.torque_limit = S(detail::json_number(bc, o, "torque_limit", 0, false, true));
-    if (o.contains("limits")) {
-      const Eigen::Vector2d l = detail::json_vec<2>(bc, o, "limits", Eigen::Vector2d::Zero(), true);
-      if (l(0) > l(1)) bc.fail("limits", "expected [lower, upper] with lower <= upper");
-      b.lower = S(l(0)); b.upper = S(l(1)); b.limited = true;
-    }
-    if (o.contains("shapes")) {
-      const auto& sh = o["shapes"];
-      if (!sh.is_array()) bc.fail("shapes", "expected an array");
-      if (int(sh.size()) > Body<S>::kMaxShapes) bc.fail("shapes", "at most " + std::to_string(Body<S>::kMaxShapes) + " shapes per body");
-      for (size_t k = 0; k < sh.size(); ++k) {
-        JsonCtx sc{source, bc.where + " shapes[" + std::to_string(k) + "]"};
-        const auto& so = sh[k];
-        if (!so.is_object() || !so.contains("type") || !so["type"].is_string())
-          sc.fail("type", "expected an object with a 'type' (sphere, capsule or box)");
-        const std::string t = so["type"].get<std::string>();
-        Shape<S>& s = b.shapes[b.num_shapes++];
-        if (t == "sphere") {
-          detail::check_keys(sc, so, {"type", "pos", "radius"});
-          s.type = Shape<S>::Type::Sphere;
-          s.pos = detail::json_vec<3>(sc, so, "pos", Eigen::Vector3d::Zero(), false).template cast<S>();
-          s.radius = S(detail::json_number(sc, so, "radius", 0, true));
-        } else if (t == "capsule") {
-          detail::check_keys(sc, so, {"type", "from", "to", "radius"});
-          s.type = Shape<S>::Type::Capsule;
-          s.pos = detail::json_vec<3>(sc, so, "from", Eigen::Vector3d::Zero(), true).template cast<S>();
-          s.pos2 = detail::json_vec<3>(sc, so, "to", Eigen::Vector3d::Zero(), true).template cast<S>();
-          s.radius = S(detail::json_number(sc, so, "radius", 0, true));
-        } else if (t == "box") {
-          detail::check_keys(sc, so, {"type", "pos", "quat", "half_extents"});
-          s.type = Shape<S>::Type::Box;
-          s.pos = detail::json_vec<3>(sc, so, "pos", Eigen::Vector3d::Zero(), false).template cast<S>();
-          s.rot = detail::json_quat(sc, so, "quat").template cast<S>();
-          const Eigen::Vector3d h = detail::json_vec<3>(sc, so, "half_extents", Eigen::Vector3d::Zero(), true);
-          if (!(h.minCoeff() > 0)) sc.fail("half_extents", "expected three positive half extents");
-          s.half = h.template cast<S>();
-          s.radius = S(1);  // unused; passes the radius check below
-        } else {
-          sc.fail("type", "'" + t + "' is not a shape type (expected sphere, capsule or box)");
-        }
-        if (!(s.radius > S(0))) sc.fail("radius", "expected a positive radius");
-        if (s.type == Shape<S>::Type::Box) s.radius = S(0);
-      }
-    }
-    m.add_body(name, b);
-  }
+  for (size_t i = 0; i < bodies.size(); ++i) detail::json_add_body(source, bodies[i], i, m, nv);
   return m;
 }
 

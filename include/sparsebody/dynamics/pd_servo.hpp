@@ -4,7 +4,8 @@
 // q^-1 q_target, i.e. expressed in the child frame like the joint velocity:
 //   tau = kp log(q^-1 q*) + kd (qd* - qd) - damping qd,
 // clamped to torque_limit (vector norm for spherical joints). This is the explicit part; the
-// damping of the next velocity, -h (kd + damping) qdd, is added implicitly inside ABA (D_i).
+// damping of the next velocity, -h (kd + damping) qdd, is added implicitly inside ABA (D_i) through
+// implicit_damping_diagonal below.
 #pragma once
 #include "sparsebody/dynamics/kinematics.hpp"
 
@@ -51,6 +52,21 @@ inline void passive_torques(const Model<S, MB, MD>& m, const typename Model<S, M
   for (int i = 0; i < m.nb; ++i) {
     const Body<S>& b = m.bodies[i];
     for (int k = 0; k < joint_nv(b.joint); ++k) tau(b.v_index + k) = -b.damping * qd(b.v_index + k);
+  }
+}
+
+// The implicit part of the servo and passive damping, Data::implicit_diagonal for ABA:
+// h (kd + damping) on every DoF of a spherical or revolute joint (h damping alone when include_kd
+// is false: torque-driven use). The free root's entries are zero here (its passive damping stays
+// explicit); the root servo writes its h K_r there.
+template <class S, int MB, int MD>
+inline void implicit_damping_diagonal(const Model<S, MB, MD>& m, S h, bool include_kd,
+                                      typename Model<S, MB, MD>::VecV& diag) {
+  diag.resize(m.nv);
+  for (int i = 0; i < m.nb; ++i) {
+    const Body<S>& b = m.bodies[i];
+    const S k = b.joint == JointType::Free ? S(0) : h * ((include_kd ? b.kd : S(0)) + b.damping);
+    for (int r = 0; r < joint_nv(b.joint); ++r) diag(b.v_index + r) = k;
   }
 }
 
