@@ -15,14 +15,10 @@
 //   n3p_physics_eval FILE.json [--clips N] [--every K] [--no-shift] [--weights PREFIX]
 //     [--root-kp X] [--root-kd X] [--root-kr X] [--root-dr X] [--max-force N] [--max-torque NM]
 //     [--feedforward SCALE] [--correction-kp X] [--target-lead FRAMES] [--hold-targets 0|1] [--contact-passes N]
-//     [--stance-support 0|1] [--support-moment 0|1] [--support-at-state 0|1] [--support-on-contact 0|1]
+//     [--stance-support 0|1] [--support-moment 0|1] [--support-on-contact 0|1]
 //     [--velocity-targets 0|1] [--acceleration SCALE] [--ground-reference 0|1] [--ground-resets 0|1]
-//     [--distributed 0|1]
 // (each overrides one field of N3PPhysicsConfig / ModelBasedControllerConfig; the README's table of
 // the default with each part turned off is made with them).
-// The former default (before 2026-12-01): --distributed 1 --root-kp 2000 --root-kd 200 --root-kr 1000
-//   --root-dr 100 --stance-support 0 --velocity-targets 0 --support-on-contact 0 --ground-reference 0
-//   --ground-resets 0 --acceleration 0 --target-lead 1
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -99,19 +95,14 @@ int main(int argc, char** argv) {
         num("--root-dr", cc.root_dr) || num("--max-force", cc.max_force) || num("--max-torque", cc.max_torque) ||
         num("--feedforward", cc.feedforward_scale) || num("--correction-kp", cfg.correction.kp))
       continue;
-    double sup = 1, dist = 0;
+    double sup = 1;
     if (num("--stance-support", sup)) { cc.stance_support = sup != 0; continue; }
     if (num("--support-moment", sup)) { cc.support_moment = sup != 0; continue; }
-    if (num("--support-at-state", sup)) { cc.support_at_state = sup != 0; continue; }
     if (num("--ground-reference", sup)) { cc.ground_reference = sup != 0; continue; }
     if (num("--ground-resets", sup)) { cfg.ground_resets = sup != 0; continue; }
     if (num("--velocity-targets", sup)) { cfg.velocity_targets = sup != 0; continue; }
     if (num("--support-on-contact", sup)) { cfg.support_on_contact = sup != 0; continue; }
     if (num("--acceleration", cc.acceleration_scale)) continue;
-    if (num("--distributed", dist)) {
-      cc.residual_mode = dist != 0 ? control::ResidualMode::Distributed : control::ResidualMode::RootServo;
-      continue;
-    }
     if (num("--target-lead", lead)) { cfg.target_lead = static_cast<int>(lead); continue; }
     double passes = cfg.contact_passes, count = 0;
     if (num("--contact-passes", passes)) { cfg.contact_passes = static_cast<int>(passes); continue; }

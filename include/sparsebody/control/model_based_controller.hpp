@@ -17,13 +17,10 @@
 //   3. Residual wrench  (PD on the root toward the predicted root, world frame)
 //        F = clamp(kp (p_ref - p) + kd (v_ref - v+), max_force)
 //        N = clamp(kr log(R_ref R^T) + dr (w_ref - w+), max_torque)
-//      ResidualMode::RootServo (default): applied to the root alone by the simulator's root servo
-//      (dynamics/simulator.hpp RootServo), its damping at the next velocity v+, w+ implicit inside
-//      ABA exactly like the joint servos' kd (D_root = I^A + h K_r), so stiff gains on the 7 kg
-//      pelvis are stable at h = 1/120; the applied wrench never exceeds the bounds.
-//      ResidualMode::Distributed (the former default): explicit, as the external wrench field of a
-//      rigid-body acceleration of the whole body (distribute() below), the only stable way to apply
-//      it explicitly, with softer gains.
+//      applied to the root alone by the simulator's root servo (dynamics/simulator.hpp RootServo),
+//      its damping at the next velocity v+, w+ implicit inside ABA exactly like the joint servos'
+//      kd (D_root = I^A + h K_r), so stiff gains on the 7 kg pelvis are stable at h = 1/120; the
+//      applied wrench never exceeds the bounds.
 //      It is the help that keeps the character balanced and on the user's path (no learned
 //      balance strategy exists without RL). Its magnitude is reported every step
 //      (residual_applied() after the step; avatar/n3p_physics.hpp residual(), residual_stats())
@@ -35,10 +32,10 @@
 // feet it stands on).
 // Validation clips (301, 3-point, `n3p_physics_eval`, N3PPhysicsPipeline defaults; each part
 // turned off in turn in the README, Neural3Points physics mode): falls 0.43 -> 0.005 per second,
-// MPJPE 12.29 -> 8.47 cm (delay removed) against the former default (Distributed, 300 N bound, no
-// stance support, no velocity targets, no acceleration feed-forward, reference in the floor, 6
-// contact solves per step). Without the stance support: 10.01 cm, 14 falls instead of 6;
-// ResidualMode::Distributed with the same rest: 10.67 cm, 15 falls.
+// MPJPE 12.29 -> 8.47 cm (delay removed) against the former default (an explicit residual spread over
+// the bodies, 300 N bound, no stance support, no velocity targets, no acceleration feed-forward,
+// reference in the floor, 6 contact solves per step). Without the stance support: 10.01 cm, 14
+// falls instead of 6.
 // Per step: no allocation, no exception.
 #pragma once
 #include <algorithm>
@@ -52,17 +49,9 @@
 
 namespace sparsebody::control {
 
-// Where the residual wrench acts.
-enum class ResidualMode : unsigned char {
-  RootServo,    // on the root alone, its damping implicit in the simulator's ABA (default)
-  Distributed,  // explicit, spread over all bodies as a rigid-body acceleration field
-};
-
 struct ModelBasedControllerConfig {
-  ResidualMode residual_mode = ResidualMode::RootServo;
-  // Residual gains. Validation clips, 3-point, RootServo: force gains 5000 / 1000 gave 212 falls,
-  // 3000 / 600 220, 8000 / 1500 227 (2000 / 200 is what the explicit Distributed mode tolerates);
-  // torque gains 1000 / 100: 212, 2000 / 200: 226, 500 / 50: 246.
+  // Residual gains. Validation clips, 3-point: force gains 5000 / 1000 gave 212 falls,
+  // 3000 / 600 220, 8000 / 1500 227; torque gains 1000 / 100: 212, 2000 / 200: 226, 500 / 50: 246.
   double root_kp = 5000;     // N/m    residual force, position gain (p_ref - p)
   double root_kd = 1000;     // N s/m  residual force, velocity gain
   double root_kr = 1000;     // N m/rad residual torque, orientation gain
@@ -79,8 +68,6 @@ struct ModelBasedControllerConfig {
   double feedforward_scale = 1.0;  // 0 disables the inverse-dynamics feed-forward
   bool stance_support = true;      // the stance legs carry the root wrench RNEA asks for (J^T w)
   bool support_moment = true;      // ... its moment too, not only its force
-  bool support_at_state = false;   // ... through the legs' Jacobians at the simulated state, per step
-                                   // (validation: MPJPE 10.70 -> 10.18 cm but falls 226 -> 307)
   double acceleration_scale = 0.5; // weight of the finite-differenced qdd_ref in RNEA (30 Hz second
                                    // differences are noisy; validation: 0 / 0.3 / 0.5 / 0.7 / 1 gave
                                    // MPJPE 10.03 / 9.82 / 9.59 / 9.54 / 9.83 cm, falls 143 / 138 /
@@ -123,7 +110,6 @@ class ModelBasedController {
   void reset() noexcept {
     tau_ff_.setZero();
     has_ref_ = false;
-    support_on_ = false;
     last_ = {};
   }
 
@@ -141,21 +127,14 @@ class ModelBasedController {
     const dynamics::Body<S>& r = m.bodies[root_];
     if (cfg_.feedforward_scale != 0) {
       dynamics::rnea(m, d_, q, v1_, a_, tau_ff_);  // leaves d_ with q's kinematics, not world ones
-      support_on_ = false;
       if (cfg_.stance_support) {
         // The root wrench in the world (RNEA's root entries are body-frame), about the root origin.
         const dynamics::Mat3<S> Rq = dynamics::read_quat<S>(q, r.q_index + 3).toRotationMatrix();
-        support_F_ = Rq * Vec3(tau_ff_.template segment<3>(r.v_index + 3));
-        support_N_ = Rq * Vec3(tau_ff_.template segment<3>(r.v_index));
-        support_c_[0] = contact[0];
-        support_c_[1] = contact[1];
-        if (cfg_.support_at_state) {
-          support_on_ = support_F_.allFinite() && support_N_.allFinite();
-        } else {
-          dynamics::forward_kinematics(m, d_, q, &v1_, true);
-          fk_of_q_ = true;
-          support(m, d_, support_F_, support_N_, contact, S(1), tau_ff_);
-        }
+        const Vec3 F = Rq * Vec3(tau_ff_.template segment<3>(r.v_index + 3));
+        const Vec3 N = Rq * Vec3(tau_ff_.template segment<3>(r.v_index));
+        dynamics::forward_kinematics(m, d_, q, &v1_, true);
+        fk_of_q_ = true;
+        support(m, d_, F, N, contact, tau_ff_);
       }
       tau_ff_ *= S(cfg_.feedforward_scale);
       tau_ff_.template segment<6>(r.v_index).setZero();  // the root is not actuated
@@ -197,56 +176,39 @@ class ModelBasedController {
 
  public:
 
-  // Torques of one simulation step (written into tau: feed-forward, plus the residual wrench in
-  // ResidualMode::Distributed) and, in ResidualMode::RootServo, the simulator's root servo set to
-  // the interpolated root reference (sim.root_servo, the root entries of targets() and
-  // target_velocities()); the wrench it applies is known after the step: residual_applied(sim).
+  // Torques of one simulation step (the feed-forward, written into tau) and the simulator's root
+  // servo set to the interpolated root reference (sim.root_servo, the root entries of targets()
+  // and target_velocities()); the wrench it applies is known after the step: residual_applied(sim).
   // alpha in [0, 1]: how far through the current reference frame this step ends.
   ResidualWrench apply(const ModelT& m, dynamics::Simulator<S, MB, MD>& sim, S alpha, VecV& tau) noexcept {
     tau = tau_ff_;
-    if (support_on_) support(m, sim.data(), support_F_, support_N_, support_c_, S(cfg_.feedforward_scale), tau);
     last_ = {};
     auto& servo = sim.root_servo;
     servo.enabled = false;
     if (!has_ref_) return last_;
     const Vec3 pr = from_p_ + alpha * (p_ref_ - from_p_);
     const Quat Rr = from_R_.slerp(alpha, R_ref_);
-    if (cfg_.residual_mode == ResidualMode::RootServo) {
-      const dynamics::Body<S>& r = m.bodies[root_];
-      servo.enabled = true;
-      servo.kp_linear = S(cfg_.root_kp);
-      servo.kd_linear = S(cfg_.root_kd);
-      servo.kp_angular = S(cfg_.root_kr);
-      servo.kd_angular = S(cfg_.root_dr);
-      servo.max_force = S(cfg_.max_force);
-      servo.max_torque = S(cfg_.max_torque);
-      auto& qt = sim.targets();
-      qt.template segment<3>(r.q_index) = pr;
-      qt(r.q_index + 3) = Rr.w();
-      qt.template segment<3>(r.q_index + 4) = Rr.vec();
-      auto& vt = sim.target_velocities();  // target body frame: (R_r^T w_ref, R_r^T v_ref)
-      vt.template segment<3>(r.v_index) = Rr.conjugate() * w_ref_;
-      vt.template segment<3>(r.v_index + 3) = Rr.conjugate() * v_ref_;
-      return last_;
-    }
-    const dynamics::Data<S, MB, MD>& d = sim.data();
-    const dynamics::Mat3<S>& R = d.R[root_];
-    const Vec3 w = R * Vec3(d.v[root_].template head<3>()), v = R * Vec3(d.v[root_].template tail<3>());
-    Vec3 F = S(cfg_.root_kp) * (pr - d.p[root_]) + S(cfg_.root_kd) * (v_ref_ - v);
-    Vec3 N = S(cfg_.root_kr) * dynamics::quat_log(Quat(Rr * Quat(R).conjugate())) + S(cfg_.root_dr) * (w_ref_ - w);
-    clamp(F, S(cfg_.max_force));
-    clamp(N, S(cfg_.max_torque));
-    if (!F.allFinite() || !N.allFinite()) return last_;
-    distribute(m, d, F, N, tau);  // ResidualMode::Distributed
-    last_.force = double(F.norm());
-    last_.torque = double(N.norm());
+    const dynamics::Body<S>& r = m.bodies[root_];
+    servo.enabled = true;
+    servo.kp_linear = S(cfg_.root_kp);
+    servo.kd_linear = S(cfg_.root_kd);
+    servo.kp_angular = S(cfg_.root_kr);
+    servo.kd_angular = S(cfg_.root_dr);
+    servo.max_force = S(cfg_.max_force);
+    servo.max_torque = S(cfg_.max_torque);
+    auto& qt = sim.targets();
+    qt.template segment<3>(r.q_index) = pr;
+    qt(r.q_index + 3) = Rr.w();
+    qt.template segment<3>(r.q_index + 4) = Rr.vec();
+    auto& vt = sim.target_velocities();  // target body frame: (R_r^T w_ref, R_r^T v_ref)
+    vt.template segment<3>(r.v_index) = Rr.conjugate() * w_ref_;
+    vt.template segment<3>(r.v_index + 3) = Rr.conjugate() * v_ref_;
     return last_;
   }
 
-  // The residual wrench of the step just taken (call after sim.step): the root servo's applied
-  // wrench in ResidualMode::RootServo, the distributed resultant otherwise.
+  // The residual wrench of the step just taken (call after sim.step): the root servo's applied wrench.
   ResidualWrench residual_applied(const dynamics::Simulator<S, MB, MD>& sim) noexcept {
-    if (cfg_.residual_mode == ResidualMode::RootServo && sim.root_servo.enabled) {
+    if (sim.root_servo.enabled) {
       last_.force = double(sim.root_servo_force().norm());
       last_.torque = double(sim.root_servo_torque().norm());
     }
@@ -258,56 +220,15 @@ class ModelBasedController {
 
  private:
   using Vec3 = dynamics::Vec3<S>;
-  // The resultant (F, N about the centre of mass) as the external wrench field of a rigid-body
-  // acceleration: each body gets w_i = (m_i (a + alpha x r_i), I_i alpha) with a = F / M,
-  // alpha = I_c^-1 N (I_c: composite inertia about the COM, r_i: body COM from the body COM), so
-  // the sum over bodies is exactly (F, N) and the help moves the body as a whole instead of jerking
-  // the light pelvis against the stiff servos (a wrench on the root alone, with explicit damping,
-  // is unstable at h = 1/120 for the 7 kg pelvis). Generalised torques tau += sum_i J_i^T w_i,
-  // by one backward pass as in RNEA.
-  void distribute(const ModelT& m, const dynamics::Data<S, MB, MD>& d, const Vec3& F, const Vec3& N, VecV& tau) noexcept {
-    Vec3 c = Vec3::Zero();
-    S M = 0;
-    for (int i = 0; i < m.nb; ++i) {
-      x_[i] = dynamics::point_position(d, i, m.bodies[i].com);
-      c += m.bodies[i].mass * x_[i];
-      M += m.bodies[i].mass;
-    }
-    c /= M;
-    dynamics::Mat3<S> Ic = dynamics::Mat3<S>::Zero();
-    for (int i = 0; i < m.nb; ++i) {
-      const Vec3 r = x_[i] - c;
-      Ic += d.R[i] * m.bodies[i].inertia * d.R[i].transpose() +
-            m.bodies[i].mass * (r.squaredNorm() * dynamics::Mat3<S>::Identity() - r * r.transpose());
-    }
-    const Vec3 a = F / M, al = Ic.inverse() * N;
-    for (int i = 0; i < m.nb; ++i) {
-      const Vec3 f = m.bodies[i].mass * (a + al.cross(x_[i] - c));
-      const Vec3 n = d.R[i] * m.bodies[i].inertia * d.R[i].transpose() * al + (x_[i] - d.p[i]).cross(f);
-      fb_[i].template head<3>() = d.R[i].transpose() * n;  // about the body origin, body frame
-      fb_[i].template tail<3>() = d.R[i].transpose() * f;
-    }
-    for (int i = m.nb - 1; i >= 0; --i) {
-      const dynamics::Body<S>& b = m.bodies[i];
-      switch (b.joint) {
-        case dynamics::JointType::Free: tau.template segment<6>(b.v_index) += fb_[i]; break;
-        case dynamics::JointType::Spherical: tau.template segment<3>(b.v_index) += fb_[i].template head<3>(); break;
-        case dynamics::JointType::Revolute: tau(b.v_index) += b.axis.dot(fb_[i].template head<3>()); break;
-        case dynamics::JointType::Fixed: break;
-      }
-      if (b.parent >= 0) fb_[b.parent] += d.X[i].apply_transpose_force(fb_[i]);
-    }
-  }
-
   // The floor carries the root wrench RNEA asked for: tau_leg -= J^T w on the stance legs, J from
-  // the kinematics in dd (the reference's, or the simulated character's: support_at_state).
+  // the reference's kinematics in dd.
   void support(const ModelT& m, const dynamics::Data<S, MB, MD>& dd, const Vec3& F, const Vec3& N, const double (&contact)[2],
-               S scale, VecV& tau) noexcept {
+               VecV& tau) noexcept {
     const double cs = std::max(0.0, contact[0]) + std::max(0.0, contact[1]);
     if (!(cs > 0.1)) return;  // flight: no support
     for (int s = 0; s < 2; ++s) {
       if (leg_len_[s] == 0 || !(contact[s] > 0)) continue;
-      const S share = scale * S(contact[s] / cs);
+      const S share = S(contact[s] / cs);
       J_.resize(6, m.nv);
       // The root wrench (N about the root origin, F) received by the foot: its Jacobian at the root origin.
       const Vec3 at = cfg_.support_moment ? Vec3(dd.R[foot_[s]].transpose() * (dd.p[root_] - dd.p[foot_[s]])) : Vec3::Zero();
@@ -323,26 +244,16 @@ class ModelBasedController {
     }
   }
 
-  static void clamp(Vec3& x, S limit) noexcept {
-    const S n = x.norm();
-    if (n > limit && n > S(0)) x *= limit / n;
-  }
-
   ModelBasedControllerConfig cfg_;
   dynamics::Data<S, MB, MD> d_;  // RNEA workspace
   int root_ = 0;
   int foot_[2] = {-1, -1}, leg_[2][3] = {}, leg_len_[2] = {};
   Eigen::Matrix<S, 6, Eigen::Dynamic, 0, 6, MD> J_;
-  std::array<Vec3, MB> x_{};
-  std::array<dynamics::Vec6<S>, MB> fb_{};
   VecV tau_ff_, v0_, v1_, a_;
   Vec3 p_ref_ = Vec3::Zero(), from_p_ = Vec3::Zero(), v_ref_ = Vec3::Zero(), w_ref_ = Vec3::Zero();
   Quat R_ref_ = Quat::Identity(), from_R_ = Quat::Identity();
   bool has_ref_ = false;
-  Vec3 support_F_ = Vec3::Zero(), support_N_ = Vec3::Zero();  // root wrench the stance legs carry (world)
-  double support_c_[2] = {0, 0};
-  bool support_on_ = false;  // support_at_state: added per step in apply()
-  bool fk_of_q_ = false;     // d_ holds the world kinematics of set_reference's q
+  bool fk_of_q_ = false;  // d_ holds the world kinematics of set_reference's q
   ResidualWrench last_;
 };
 
