@@ -90,23 +90,23 @@ int main(int argc, char** argv) {
       return true;
     };
     auto& cc = cfg.controller;
-    double lead = cfg.target_lead, hold = 0;
-    if (num("--root-kp", cc.root_kp) || num("--root-kd", cc.root_kd) || num("--root-kr", cc.root_kr) ||
-        num("--root-dr", cc.root_dr) || num("--max-force", cc.max_force) || num("--max-torque", cc.max_torque) ||
+    double lead = cc.target_lead, hold = 0;
+    if (num("--root-kp", cc.kp_linear) || num("--root-kd", cc.kd_linear) || num("--root-kr", cc.kp_angular) ||
+        num("--root-dr", cc.kd_angular) || num("--max-force", cc.max_force) || num("--max-torque", cc.max_torque) ||
         num("--feedforward", cc.feedforward_scale) || num("--correction-kp", cfg.correction.kp))
       continue;
     double sup = 1;
     if (num("--stance-support", sup)) { cc.stance_support = sup != 0; continue; }
     if (num("--support-moment", sup)) { cc.support_moment = sup != 0; continue; }
     if (num("--ground-reference", sup)) { cc.ground_reference = sup != 0; continue; }
-    if (num("--ground-resets", sup)) { cfg.ground_resets = sup != 0; continue; }
-    if (num("--velocity-targets", sup)) { cfg.velocity_targets = sup != 0; continue; }
-    if (num("--support-on-contact", sup)) { cfg.support_on_contact = sup != 0; continue; }
+    if (num("--ground-resets", sup)) { cc.ground_resets = sup != 0; continue; }
+    if (num("--velocity-targets", sup)) { cc.velocity_targets = sup != 0; continue; }
+    if (num("--support-on-contact", sup)) { cc.support_on_contact = sup != 0; continue; }
     if (num("--acceleration", cc.acceleration_scale)) continue;
-    if (num("--target-lead", lead)) { cfg.target_lead = static_cast<int>(lead); continue; }
+    if (num("--target-lead", lead)) { cc.target_lead = static_cast<int>(lead); continue; }
     double passes = cfg.contact_passes, count = 0;
     if (num("--contact-passes", passes)) { cfg.contact_passes = static_cast<int>(passes); continue; }
-    if (num("--hold-targets", hold)) { cfg.per_frame_targets = hold == 0; continue; }
+    if (num("--hold-targets", hold)) { cc.per_frame_targets = hold == 0; continue; }
     if (num("--clips", count)) { max_clips = static_cast<int>(count); continue; }
     if (num("--every", count)) { every = std::max(1, static_cast<int>(count)); continue; }
     if (!std::strcmp(argv[i], "--no-shift")) shift = false;

@@ -10,7 +10,7 @@
 //            (control/n3p_control_predictor.hpp), when policy weights are given;
 //          ControllerKind::ModelBased (default, no RL): targets = q_ref of the newest frame,
 //            held like the policy's with per_frame_targets = false; by default (measured better,
-//            see N3PPhysicsConfig) refreshed every frame to the reference 2 frames ahead of the
+//            see ModelBasedControllerConfig) refreshed every frame to the reference 2 frames ahead of the
 //            tracked one instead; plus per frame velocity
 //            targets qd_ref, an inverse-dynamics feed-forward carried by the stance legs and a
 //            bounded residual wrench on the root (control/model_based_controller.hpp; its
@@ -61,7 +61,7 @@ enum class ControllerKind : unsigned char { ModelBased, Policy };
 struct N3PPhysicsConfig {
   N3PConfig direct{};                           // the reference: direct mode (foot pinning + arm IK)
   character::AvatarOptions avatar{};            // 1.75 m, 63 kg, kp 200, kd 20 (paper §7)
-  control::ModelBasedControllerConfig controller{};
+  control::ModelBasedControllerConfig controller{};  // ControllerKind::ModelBased only
   control::TrackerCorrectionConfig correction{};  // kp 1000, kd 10 (§6.2)
   control::FallDetectorConfig fall{};
   int substeps = 4;                  // simulation steps per 30 Hz frame (120 Hz)
@@ -72,25 +72,6 @@ struct N3PPhysicsConfig {
   // / 30 / 25 in 1330 s, MPJPE 8.47 / 9.09 / 8.37 / 8.82 / 8.77 cm; bounded at 300 N: 95 vs 107
   // falls at 3 vs 6. 3 also makes the benchmark frame 70 instead of 92 us. `--contact-passes`.
   int contact_passes = 3;
-  // Model-based controller only:
-  // - per_frame_targets: PD targets refreshed every frame to the reference `target_lead` frames
-  //   ahead of the frame being tracked, instead of held for 3 frames (the policy's 10 Hz, §7).
-  //   Chosen by measurement (validation, 3-point, delay removed, the default otherwise): per frame
-  //   with lead 2: MPJPE 8.47 cm, 6 falls in 1330 s; lead 1: 8.52 cm, 11; held (the newest
-  //   reference, 1-3 frames ahead): 8.64 cm, 9. `--hold-targets 1` / `--target-lead` in the evaluation.
-  // - velocity_targets: the servos' velocity targets qd* = the reference velocity (every frame),
-  //   so kd damps the lag behind the motion instead of the motion itself.
-  // - ground_resets: a (re)start or fall reset puts the character on the reference lifted out of
-  //   the floor (control::ModelBasedController::ground_lift: the predicted pose on the avatar's
-  //   feet is 4.5 cm in it on average), not into it (validation: falls 155 -> 143).
-  // - support_on_contact: the stance support's share of a foot is its predicted contact c only
-  //   while the simulated foot touches the ground, 0 in the air (validation: falls 566 -> 212 with
-  //   the rest; flooring the share of a touching foot at 0.5 gave 254, ungated c 328).
-  bool per_frame_targets = true;
-  int target_lead = 2;
-  bool velocity_targets = true;
-  bool support_on_contact = true;
-  bool ground_resets = true;
   double max_reference_jump = 0.5;   // m per frame of the reference root; more restarts the physics
 };
 
@@ -283,10 +264,10 @@ class N3PPhysicsPipeline {
     ++restarts_;
   }
 
-  // The character in configuration q (lifted out of the floor with ground_resets), velocity v.
+  // The character in configuration q (lifted out of the floor with controller.ground_resets), velocity v.
   void place(const VecQ& q, const VecV& v) noexcept {
     q_place_ = q;
-    if (cfg_.ground_resets) q_place_(model_.bodies[retarget_.body_of(0)].q_index + 1) += controller_.ground_lift(model_, q_place_);
+    if (cfg_.controller.ground_resets) q_place_(model_.bodies[retarget_.body_of(0)].q_index + 1) += controller_.ground_lift(model_, q_place_);
     sim_.set_state(q_place_, v);
   }
 
@@ -305,11 +286,11 @@ class N3PPhysicsPipeline {
     const S dt = S(1.0 / 30), h = dt / S(cfg_.substeps);
     const auto& hd = hands_[slot(F)];
     double support[2] = {hd.contact[0], hd.contact[1]};
-    if (cfg_.support_on_contact)  // stance support only for a foot the simulated character stands on
+    if (cfg_.controller.support_on_contact)  // stance support only for a foot the simulated character stands on
       for (int s = 0; s < 2; ++s) support[s] = contact(s) ? support[s] : 0.0;
     controller_.set_reference(model_, ref_at(F - 2), ref_at(F - 1), ref_at(F), dt, support);
-    if (cfg_.per_frame_targets && !control_) sim_.targets() = ref_at(F + cfg_.target_lead);
-    if (!control_ && cfg_.velocity_targets) sim_.target_velocities() = controller_.reference_velocity();
+    if (cfg_.controller.per_frame_targets && !control_) sim_.targets() = ref_at(F + cfg_.controller.target_lead);
+    if (!control_ && cfg_.controller.velocity_targets) sim_.target_velocities() = controller_.reference_velocity();
     out_time_ = hd.time;
     const bool policy = control_ != nullptr;
     for (int k = 0; k < cfg_.substeps; ++k) {

@@ -2,8 +2,8 @@
 // are not shipped) and stands in for the control policy pi of §5. Three parts, per simulation step:
 //
 //   1. PD targets  u = the predicted pose (q* of every internal joint), refreshed per frame or held
-//      until the next control step like the policy's output (avatar/n3p_physics.hpp,
-//      N3PPhysicsConfig::per_frame_targets); the simulator's servos (kp = 200, kd = 20, implicit
+//      until the next control step like the policy's output (per_frame_targets, applied by
+//      avatar/n3p_physics.hpp); the simulator's servos (kp = 200, kd = 20, implicit
 //      damping) turn it into torques, with velocity targets qd* = qd_ref.
 //   2. Feed-forward  tau_ff = RNEA(q_ref, qd_ref, qdd_ref), internal joints only, with qd_ref and
 //      qdd_ref finite-differenced from the predicted 30 Hz poses. It removes the servo's steady
@@ -15,8 +15,8 @@
 //      on the DoFs of UpperLeg, LowerLeg, Foot, J_s the foot's Jacobian at the root origin (so
 //      the moment N is carried too, support_moment; without it the legs let the body tip).
 //   3. Residual wrench  (PD on the root toward the predicted root, world frame)
-//        F = clamp(kp (p_ref - p) + kd (v_ref - v+), max_force)
-//        N = clamp(kr log(R_ref R^T) + dr (w_ref - w+), max_torque)
+//        F = clamp(kp_linear (p_ref - p) + kd_linear (v_ref - v+), max_force)
+//        N = clamp(kp_angular log(R_ref R^T) + kd_angular (w_ref - w+), max_torque)
 //      applied to the root alone by the simulator's root servo (dynamics/simulator.hpp RootServo),
 //      its damping at the next velocity v+, w+ implicit inside ABA exactly like the joint servos'
 //      kd (D_root = I^A + h K_r), so stiff gains on the 7 kg pelvis are stable at h = 1/120; the
@@ -52,10 +52,11 @@ namespace sparsebody::control {
 struct ModelBasedControllerConfig {
   // Residual gains. Validation clips, 3-point: force gains 5000 / 1000 gave 212 falls,
   // 3000 / 600 220, 8000 / 1500 227; torque gains 1000 / 100: 212, 2000 / 200: 226, 500 / 50: 246.
-  double root_kp = 5000;     // N/m    residual force, position gain (p_ref - p)
-  double root_kd = 1000;     // N s/m  residual force, velocity gain
-  double root_kr = 1000;     // N m/rad residual torque, orientation gain
-  double root_dr = 100;      // N m s/rad residual torque, angular velocity gain
+  // They are the simulator's root servo gains (dynamics::RootServo, same names).
+  double kp_linear = 5000;   // N/m       residual force, position gain (p_ref - p)
+  double kd_linear = 1000;   // N s/m     residual force, velocity gain
+  double kp_angular = 1000;  // N m/rad   residual torque, orientation gain
+  double kd_angular = 100;   // N m s/rad residual torque, angular velocity gain
   bool ground_reference = true;    // root target lifted out of the floor (ground_lift())
   double max_ground_lift = 0.1;    // m
   // Bounds, chosen on the validation clips (301, 3-point, N3PPhysicsPipeline defaults; falls in
@@ -72,6 +73,25 @@ struct ModelBasedControllerConfig {
                                    // differences are noisy; validation: 0 / 0.3 / 0.5 / 0.7 / 1 gave
                                    // MPJPE 10.03 / 9.82 / 9.59 / 9.54 / 9.83 cm, falls 143 / 138 /
                                    // 130 / 146 / 151, skating 28.7 / 27.1 / 26.6 / 29.0 / 33.7 cm/s)
+  // How the pipeline (avatar/n3p_physics.hpp) drives this controller:
+  // - per_frame_targets: PD targets refreshed every frame to the reference `target_lead` frames
+  //   ahead of the frame being tracked, instead of held for 3 frames (the policy's 10 Hz, §7).
+  //   Chosen by measurement (validation, 3-point, delay removed, the default otherwise): per frame
+  //   with lead 2: MPJPE 8.47 cm, 6 falls in 1330 s; lead 1: 8.52 cm, 11; held (the newest
+  //   reference, 1-3 frames ahead): 8.64 cm, 9. `--hold-targets 1` / `--target-lead` in the evaluation.
+  // - velocity_targets: the servos' velocity targets qd* = the reference velocity (every frame),
+  //   so kd damps the lag behind the motion instead of the motion itself.
+  // - ground_resets: a (re)start or fall reset puts the character on the reference lifted out of
+  //   the floor (ground_lift(): the predicted pose on the avatar's feet is 4.5 cm in it on
+  //   average), not into it (validation: falls 155 -> 143).
+  // - support_on_contact: the stance support's share of a foot is its predicted contact c only
+  //   while the simulated foot touches the ground, 0 in the air (validation: falls 566 -> 212 with
+  //   the rest; flooring the share of a touching foot at 0.5 gave 254, ungated c 328).
+  bool per_frame_targets = true;
+  int target_lead = 2;
+  bool velocity_targets = true;
+  bool support_on_contact = true;
+  bool ground_resets = true;
 };
 
 // Size of the residual wrench of the last step (N, N m).
@@ -190,10 +210,10 @@ class ModelBasedController {
     const Quat Rr = from_R_.slerp(alpha, R_ref_);
     const dynamics::Body<S>& r = m.bodies[root_];
     servo.enabled = true;
-    servo.kp_linear = S(cfg_.root_kp);
-    servo.kd_linear = S(cfg_.root_kd);
-    servo.kp_angular = S(cfg_.root_kr);
-    servo.kd_angular = S(cfg_.root_dr);
+    servo.kp_linear = S(cfg_.kp_linear);
+    servo.kd_linear = S(cfg_.kd_linear);
+    servo.kp_angular = S(cfg_.kp_angular);
+    servo.kd_angular = S(cfg_.kd_angular);
     servo.max_force = S(cfg_.max_force);
     servo.max_torque = S(cfg_.max_torque);
     auto& qt = sim.targets();
