@@ -321,9 +321,9 @@ class N3PPhysicsPipeline {
     const int r = retarget_.body_of(0);
     const VecQ& qr = ref_at(F);
     const Eigen::Quaterniond Rr(double(qr(3)), double(qr(4)), double(qr(5)), double(qr(6)));
-    const control::FallReason why = fall_.update(d.p[r].template cast<double>(), d.R[r].col(1).template cast<double>(),
-                                                 Eigen::Vector3d(double(qr(0)), double(qr(1)), double(qr(2))),
-                                                 Rr.normalized() * Eigen::Vector3d::UnitY());
+    const control::FallReason why =
+        fall_.update(d.p[r].template cast<double>(), d.R[r].col(1).template cast<double>().normalized(),
+                     Eigen::Vector3d(double(qr(0)), double(qr(1)), double(qr(2))), (Rr.normalized() * Eigen::Vector3d::UnitY()).normalized());
     if (why != control::FallReason::None) {
       ++falls_;
       ++falls_by_[static_cast<int>(why)];
@@ -383,7 +383,7 @@ class N3PPhysicsPipeline {
   control::N3PSimRetarget<S, MB, MD> retarget_;
   control::ModelBasedController<S, MB, MD> controller_;
   control::TrackerCorrection<S, MB, MD> correction_;
-  control::FallDetector fall_;
+  control::FallDetector<double> fall_;
   trackers::Resampler resampler_;
   std::array<VecQ, kHistory> ref_;
   std::array<Hands, kHistory> hands_{};

@@ -55,10 +55,12 @@
 #pragma once
 #include <array>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <string>
 
 #include "sparsebody/character/avatar.hpp"
+#include "sparsebody/control/fall_detector.hpp"
 #include "sparsebody/control/questsim_observation.hpp"
 #include "sparsebody/networks/policy_nets.hpp"
 #include "sparsebody/nn/network.hpp"
@@ -76,6 +78,7 @@ struct QuestSimConfig {
   double min_height = 1.0, max_height = 2.4;  // heights accepted by user_height_from_headset (m)
   double fall_height_ratio = 0.5;  // root below this fraction of its standing height: fallen
   double fall_tilt = 1.2;          // rad (~69 deg): root up-axis tilt beyond this: fallen
+  // (both checked by control::FallDetector without a reference: fall_detector_config())
   double max_gap = 0.25;           // s: resampler time gap that restarts
   trackers::SanitizerConfig sanitizer{};
 };
@@ -155,7 +158,7 @@ class QuestSimPipeline {
     sim_->mode = dynamics::ControlMode::Torque;
     h_ = S(1.0 / (cfg.control_rate * cfg.substeps));
     standing_q_ = model.neutral_configuration();
-    standing_root_y_ = standing_q_(1);
+    fall_ = control::FallDetector<S>(fall_detector_config(cfg, standing_q_(1)));
     zero_v_ = Sim::VecV::Zero(model.nv);
     tau_ = zero_v_;
     sim_->torques().setZero();
@@ -241,7 +244,17 @@ class QuestSimPipeline {
   // Loss of balance: root below fall_height_ratio of its standing height, or tilted beyond fall_tilt.
   bool fallen() const noexcept {
     const auto& d = sim_->data();
-    return d.p[0].y() < S(cfg_.fall_height_ratio) * standing_root_y_ || d.R[0](1, 1) < S(std::cos(cfg_.fall_tilt));
+    return fall_.posture(d.p[0], d.R[0].col(1)) != control::FallReason::None;
+  }
+
+  // The fall rule above as a reference-free FallDetector: min_height = fall_height_ratio x the
+  // standing root height (the product in S), max_tilt = fall_tilt; no drop or divergence rule.
+  static control::FallDetectorConfig fall_detector_config(const QuestSimConfig& cfg, S standing_root_y) noexcept {
+    control::FallDetectorConfig f;
+    f.min_height = double(S(cfg.fall_height_ratio) * standing_root_y);
+    f.max_tilt = cfg.fall_tilt;
+    f.max_drop = f.max_error = std::numeric_limits<double>::infinity();
+    return f;
   }
 
   // The character standing in its reference pose under the headset of `frame`, facing the
@@ -304,7 +317,7 @@ class QuestSimPipeline {
   std::array<float, NJ> action_{};
   typename Sim::VecQ standing_q_;
   typename Sim::VecV zero_v_, tau_;
-  S standing_root_y_ = S(1);
+  control::FallDetector<S> fall_;
   bool started_ = false;
   QuestSimEvent last_event_ = QuestSimEvent::Waiting;
   dynamics::StepStatus last_sim_status_ = dynamics::StepStatus::Ok;
