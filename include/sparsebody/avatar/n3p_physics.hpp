@@ -9,12 +9,12 @@
 //          ControllerKind::Policy: the combined control predictor + learned policy pi
 //            (control/n3p_control_predictor.hpp), when policy weights are given;
 //          ControllerKind::ModelBased (default, no RL): targets = q_ref of the newest frame,
-//            held like the policy's with per_frame_targets = false; by default (measured better,
-//            see ModelBasedControllerConfig) refreshed every frame to the reference 2 frames ahead of the
-//            tracked one instead; plus per frame velocity
-//            targets qd_ref, an inverse-dynamics feed-forward carried by the stance legs and a
-//            bounded residual wrench on the root (control/model_based_controller.hpp; its
-//            magnitude is reported every step: residual(), residual_stats());
+//            held like the policy's with per_frame_targets = false; by default (it tracks better)
+//            refreshed every frame to the reference 2 frames ahead of the tracked one instead;
+//            plus per frame velocity targets qd_ref, an inverse-dynamics feed-forward carried by
+//            the stance legs and a bounded residual wrench on the root
+//            (control/model_based_controller.hpp; its magnitude is reported every step:
+//            residual(), residual_stats());
 //     -> per substep: controller torques + tracker position correction (§6.2, Eq. (19),
 //        control/tracker_correction.hpp) -> Simulator::step(1/120)
 //     -> once per frame: fall detection (§9, control/fall_detector.hpp) -> reset to the reference
@@ -68,9 +68,8 @@ struct N3PPhysicsConfig {
   // Contact solves per simulation step (Simulator::contact.max_passes; the engine's default is 6).
   // On walking input the light-contact iterations of the feet do not settle (the sliding damper
   // and Fn feed each other back), so a step runs to the cap and its result depends on where it
-  // stops. Validation (301 clips, 3-point, delay removed), cap 3 / 4 / 5 / 6 / 8: falls 6 / 81 / 14
-  // / 30 / 25 in 1330 s, MPJPE 8.47 / 9.09 / 8.37 / 8.82 / 8.77 cm; bounded at 300 N: 95 vs 107
-  // falls at 3 vs 6. 3 also makes the benchmark frame 70 instead of 92 us. `--contact-passes`.
+  // stops; 3 fell least on the validation clips and is the fastest (README: the figures per cap).
+  // `--contact-passes` in the evaluation.
   int contact_passes = 3;
   double max_reference_jump = 0.5;   // m per frame of the reference root; more restarts the physics
 };

@@ -25,17 +25,14 @@
 //      balance strategy exists without RL). Its magnitude is reported every step
 //      (residual_applied() after the step; avatar/n3p_physics.hpp residual(), residual_stats())
 //      so users see how much help was needed; max_force defaults to the body weight (the help
-//      can hold the body up but never throw it; on average it gives 42 % of the weight).
+//      can hold the body up but never throw it).
 // The root reference is interpolated over the 4 substeps of a 30 Hz frame (linear / slerp) and
 // lifted out of the floor (ground_reference, ground_lift(): the predicted pose put on the avatar's
-// feet is 4.5 cm in the floor on average, and a root servo toward it pulls the body down on the
-// feet it stands on).
-// Validation clips (301, 3-point, `n3p_physics_eval`, N3PPhysicsPipeline defaults; each part
-// turned off in turn in the README, Neural3Points physics mode): falls 0.43 -> 0.005 per second,
-// MPJPE 12.29 -> 8.47 cm (delay removed) against the former default (an explicit residual spread over
-// the bodies, 300 N bound, no stance support, no velocity targets, no acceleration feed-forward,
-// reference in the floor, 6 contact solves per step). Without the stance support: 10.01 cm, 14
-// falls instead of 6.
+// feet is a few cm in the floor, and a root servo toward it pulls the body down on the feet it
+// stands on).
+// The defaults were chosen on the validation clips with examples/n3p_physics_eval.cpp; the
+// figures (each part turned off in turn, the bounds) are in the README (Neural3Points physics
+// mode), how they were reached in the commit log.
 // Per step: no allocation, no exception.
 #pragma once
 #include <algorithm>
@@ -50,43 +47,33 @@
 namespace sparsebody::control {
 
 struct ModelBasedControllerConfig {
-  // Residual gains. Validation clips, 3-point: force gains 5000 / 1000 gave 212 falls,
-  // 3000 / 600 220, 8000 / 1500 227; torque gains 1000 / 100: 212, 2000 / 200: 226, 500 / 50: 246.
-  // They are the simulator's root servo gains (dynamics::RootServo, same names).
+  // Residual gains: the simulator's root servo gains (dynamics::RootServo, same names).
   double kp_linear = 5000;   // N/m       residual force, position gain (p_ref - p)
   double kd_linear = 1000;   // N s/m     residual force, velocity gain
   double kp_angular = 1000;  // N m/rad   residual torque, orientation gain
   double kd_angular = 100;   // N m s/rad residual torque, angular velocity gain
   bool ground_reference = true;    // root target lifted out of the floor (ground_lift())
   double max_ground_lift = 0.1;    // m
-  // Bounds, chosen on the validation clips (301, 3-point, N3PPhysicsPipeline defaults; falls in
-  // 1330 s / MPJPE / mean |F|): 300 N, 150 N m: 104 / 9.54 cm / 197 N;  500 N, 250 N m: 20 / 8.70
-  // cm / 243 N;  620 N, 250 N m: 6 / 8.47 cm / 254 N;  700 N, 250 N m: 4 / 8.27 cm / 255 N.
-  // The default force bound is the avatar's weight (63 kg x 9.81 = 618 N): the help can at most
-  // hold the body up, never throw it; on average the feet still carry about 60 % of the weight.
+  // Bounds. The default force bound is the avatar's weight (63 kg x 9.81 = 618 N): the help can at
+  // most hold the body up, never throw it (README: falls and MPJPE against the bound).
   double max_force = 620;    // N   |F| bound
   double max_torque = 250;   // N m |N| bound
   double feedforward_scale = 1.0;  // 0 disables the inverse-dynamics feed-forward
   bool stance_support = true;      // the stance legs carry the root wrench RNEA asks for (J^T w)
   bool support_moment = true;      // ... its moment too, not only its force
   double acceleration_scale = 0.5; // weight of the finite-differenced qdd_ref in RNEA (30 Hz second
-                                   // differences are noisy; validation: 0 / 0.3 / 0.5 / 0.7 / 1 gave
-                                   // MPJPE 10.03 / 9.82 / 9.59 / 9.54 / 9.83 cm, falls 143 / 138 /
-                                   // 130 / 146 / 151, skating 28.7 / 27.1 / 26.6 / 29.0 / 33.7 cm/s)
+                                   // differences are noisy: the full weight tracks worse)
   // How the pipeline (avatar/n3p_physics.hpp) drives this controller:
   // - per_frame_targets: PD targets refreshed every frame to the reference `target_lead` frames
-  //   ahead of the frame being tracked, instead of held for 3 frames (the policy's 10 Hz, §7).
-  //   Chosen by measurement (validation, 3-point, delay removed, the default otherwise): per frame
-  //   with lead 2: MPJPE 8.47 cm, 6 falls in 1330 s; lead 1: 8.52 cm, 11; held (the newest
-  //   reference, 1-3 frames ahead): 8.64 cm, 9. `--hold-targets 1` / `--target-lead` in the evaluation.
+  //   ahead of the frame being tracked, instead of held for 3 frames (the policy's 10 Hz, §7);
+  //   a lead makes up for the servos' lag. `--hold-targets 1` / `--target-lead` in the evaluation.
   // - velocity_targets: the servos' velocity targets qd* = the reference velocity (every frame),
   //   so kd damps the lag behind the motion instead of the motion itself.
   // - ground_resets: a (re)start or fall reset puts the character on the reference lifted out of
-  //   the floor (ground_lift(): the predicted pose on the avatar's feet is 4.5 cm in it on
-  //   average), not into it (validation: falls 155 -> 143).
+  //   the floor (ground_lift()), not into it.
   // - support_on_contact: the stance support's share of a foot is its predicted contact c only
-  //   while the simulated foot touches the ground, 0 in the air (validation: falls 566 -> 212 with
-  //   the rest; flooring the share of a touching foot at 0.5 gave 254, ungated c 328).
+  //   while the simulated foot touches the ground, 0 in the air (a foot in the air cannot carry
+  //   the body).
   bool per_frame_targets = true;
   int target_lead = 2;
   bool velocity_targets = true;
@@ -177,8 +164,8 @@ class ModelBasedController {
   }
 
   // How far the configuration q's lowest contact point is below the floor (>= 0, at most
-  // max_ground_lift): the predicted pose put on the avatar's feet penetrates it by 4.5 cm on
-  // average on the validation clips (its feet and soles are not the skeleton's).
+  // max_ground_lift): the predicted pose put on the avatar's feet penetrates it (its feet and
+  // soles are not the skeleton's).
   S ground_lift(const ModelT& m, const VecQ& q) noexcept {
     dynamics::forward_kinematics(m, d_, q, static_cast<const VecV*>(nullptr), true);
     return ground_lift_of_kinematics(m);
