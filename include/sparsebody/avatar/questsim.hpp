@@ -59,6 +59,8 @@
 #include <memory>
 #include <string>
 
+#include "sparsebody/avatar/questsim_config.hpp"
+#include "sparsebody/avatar/questsim_event.hpp"
 #include "sparsebody/character/avatar.hpp"
 #include "sparsebody/control/fall_detector.hpp"
 #include "sparsebody/control/questsim_observation.hpp"
@@ -68,50 +70,6 @@
 #include "sparsebody/trackers/sanitizer.hpp"
 
 namespace sparsebody::avatar {
-
-struct QuestSimConfig {
-  double control_rate = 36.0;      // Hz: policy rate (Appendix A: 1/36 s)
-  int substeps = 2;                // simulation substeps per control step (Appendix A)
-  double torque_scale = 200.0;     // N m per unit of policy output (Appendix A: [-1, 1] -> [-200, 200])
-  double joint_damping = 0.1;      // passive joint damping, N m s/rad (Appendix A: "friction of 0.1")
-  double eye_height_ratio = 0.936; // standing headset height / stature
-  double min_height = 1.0, max_height = 2.4;  // heights accepted by user_height_from_headset (m)
-  double fall_height_ratio = 0.5;  // root below this fraction of its standing height: fallen
-  double fall_tilt = 1.2;          // rad (~69 deg): root up-axis tilt beyond this: fallen
-  // (both checked by control::FallDetector without a reference: fall_detector_config())
-  double max_gap = 0.25;           // s: resampler time gap that restarts
-  trackers::SanitizerConfig sanitizer{};
-};
-
-// What happened in a control tick.
-enum class QuestSimEvent : unsigned char {
-  Stepped = 0,        // observation, policy and substeps ran normally
-  Waiting,            // no valid headset frame yet: nothing simulated
-  TrackerReset,       // tracker restart (long loss, origin jump, time gap): character reset, then stepped
-  RejectedAction,     // non-finite observation or policy output: zero torques were applied
-  SimulationFailure,  // a substep failed (see last_sim_status()): character reset to standing
-  Fall,               // the character fell: reset to standing
-};
-inline const char* event_name(QuestSimEvent e) {
-  switch (e) {
-    case QuestSimEvent::Stepped: return "stepped";
-    case QuestSimEvent::Waiting: return "waiting";
-    case QuestSimEvent::TrackerReset: return "tracker reset";
-    case QuestSimEvent::RejectedAction: return "rejected action";
-    case QuestSimEvent::SimulationFailure: return "simulation failure";
-    default: return "fall";
-  }
-}
-
-// User height (m) from a frame where the user stands upright: headset height / eye_height_ratio.
-// NaN when the headset is invalid or non-finite, or the height is outside [min_height, max_height].
-inline double user_height_from_headset(const trackers::TrackerFrame& standing, const QuestSimConfig& cfg = {}) noexcept {
-  const int H = static_cast<int>(trackers::Tracker::Head);
-  const double y = standing.pose[H].position.y;
-  if (!standing.valid[H] || !std::isfinite(y)) return std::nan("");
-  const double h = y / cfg.eye_height_ratio;
-  return (h >= cfg.min_height && h <= cfg.max_height) ? h : std::nan("");
-}
 
 // S: simulation scalar; W: the policy's weight storage (float, or nn::f16); NF future frames;
 // NB / NJ: the avatar's bodies and non-root DoFs (the default avatar's unless a custom one is given).

@@ -8,12 +8,9 @@
 //   2. Feed-forward  tau_ff = RNEA(q_ref, qd_ref, qdd_ref), internal joints only, with qd_ref and
 //      qdd_ref finite-differenced from the predicted 30 Hz poses. It removes the servo's steady
 //      error under gravity and inertia (a PD servo alone sags by tau / kp). RNEA alone holds the
-//      body up by its root; the floor does that instead (stance_support): the root wrench
-//      w_root = (N, F) it asks for is handed to the feet in contact, shared by the contact
-//      weights c_L, c_R (w_s = c_s / (c_L + c_R) w_root), and the legs carry it:
-//        tau_leg(s) -= J_s^T w_s     (RNEA with external forces: tau = M qdd + C - J^T f_ext)
-//      on the DoFs of UpperLeg, LowerLeg, Foot, J_s the foot's Jacobian at the root origin (so
-//      the moment N is carried too, support_moment; without it the legs let the body tip).
+//      body up by its root; the floor does that instead (stance_support, control/stance_support.hpp):
+//      the root wrench w_root = (N, F) it asks for is shared by the feet in contact, and the
+//      stance legs carry it, tau_leg(s) -= J_s^T w_s (its moment N too with support_moment).
 //   3. Residual wrench  (PD on the root toward the predicted root, world frame)
 //        F = clamp(kp_linear (p_ref - p) + kd_linear (v_ref - v+), max_force)
 //        N = clamp(kp_angular log(R_ref R^T) + kd_angular (w_ref - w+), max_torque)
@@ -36,55 +33,17 @@
 // Per step: no allocation, no exception.
 #pragma once
 #include <algorithm>
-#include <array>
 #include <cmath>
 
+#include "sparsebody/control/floor_penetration.hpp"
+#include "sparsebody/control/model_based_controller_config.hpp"
 #include "sparsebody/control/n3p_sim_retarget.hpp"
-#include "sparsebody/dynamics/jacobian.hpp"
+#include "sparsebody/control/residual_wrench.hpp"
+#include "sparsebody/control/stance_support.hpp"
 #include "sparsebody/dynamics/rnea.hpp"
 #include "sparsebody/dynamics/simulator.hpp"
 
 namespace sparsebody::control {
-
-struct ModelBasedControllerConfig {
-  // Residual gains: the simulator's root servo gains (dynamics::RootServo, same names).
-  double kp_linear = 5000;   // N/m       residual force, position gain (p_ref - p)
-  double kd_linear = 1000;   // N s/m     residual force, velocity gain
-  double kp_angular = 1000;  // N m/rad   residual torque, orientation gain
-  double kd_angular = 100;   // N m s/rad residual torque, angular velocity gain
-  bool ground_reference = true;    // root target lifted out of the floor (ground_lift())
-  double max_ground_lift = 0.1;    // m
-  // Bounds. The default force bound is the avatar's weight (63 kg x 9.81 = 618 N): the help can at
-  // most hold the body up, never throw it (README: falls and MPJPE against the bound).
-  double max_force = 620;    // N   |F| bound
-  double max_torque = 250;   // N m |N| bound
-  double feedforward_scale = 1.0;  // 0 disables the inverse-dynamics feed-forward
-  bool stance_support = true;      // the stance legs carry the root wrench RNEA asks for (J^T w)
-  bool support_moment = true;      // ... its moment too, not only its force
-  double acceleration_scale = 0.5; // weight of the finite-differenced qdd_ref in RNEA (30 Hz second
-                                   // differences are noisy: the full weight tracks worse)
-  // How the pipeline (avatar/n3p_physics.hpp) drives this controller:
-  // - per_frame_targets: PD targets refreshed every frame to the reference `target_lead` frames
-  //   ahead of the frame being tracked, instead of held for 3 frames (the policy's 10 Hz, §7);
-  //   a lead makes up for the servos' lag. `--hold-targets 1` / `--target-lead` in the evaluation.
-  // - velocity_targets: the servos' velocity targets qd* = the reference velocity (every frame),
-  //   so kd damps the lag behind the motion instead of the motion itself.
-  // - ground_resets: a (re)start or fall reset puts the character on the reference lifted out of
-  //   the floor (ground_lift()), not into it.
-  // - support_on_contact: the stance support's share of a foot is its predicted contact c only
-  //   while the simulated foot touches the ground, 0 in the air (a foot in the air cannot carry
-  //   the body).
-  bool per_frame_targets = true;
-  int target_lead = 2;
-  bool velocity_targets = true;
-  bool support_on_contact = true;
-  bool ground_resets = true;
-};
-
-// Size of the residual wrench of the last step (N, N m).
-struct ResidualWrench {
-  double force = 0, torque = 0;
-};
 
 template <class S, int MB, int MD>
 class ModelBasedController {
@@ -97,13 +56,7 @@ class ModelBasedController {
   explicit ModelBasedController(const ModelT& m, ModelBasedControllerConfig cfg = {}) : cfg_(cfg), d_(m) {
     for (int i = 0; i < m.nb; ++i)
       if (m.bodies[i].joint == dynamics::JointType::Free) root_ = i;
-    const char* feet[2] = {"Foot_L", "Foot_R"};
-    for (int s = 0; s < 2; ++s) {
-      foot_[s] = m.find(feet[s]);
-      int n = 0;
-      for (int b = foot_[s]; b >= 0 && b != root_ && n < 3; b = m.bodies[b].parent) leg_[s][n++] = b;
-      leg_len_[s] = foot_[s] >= 0 ? n : 0;
-    }
+    support_ = StanceSupport<S, MB, MD>(m, root_);
     tau_ff_.setZero(m.nv);
     v0_.setZero(m.nv);
     v1_.setZero(m.nv);
@@ -141,7 +94,7 @@ class ModelBasedController {
         const Vec3 N = Rq * Vec3(tau_ff_.template segment<3>(r.v_index));
         dynamics::forward_kinematics(m, d_, q, &v1_, true);
         fk_of_q_ = true;
-        support(m, d_, F, N, contact, tau_ff_);
+        support_.apply(m, d_, F, N, contact, cfg_.support_moment, tau_ff_);
       }
       tau_ff_ *= S(cfg_.feedforward_scale);
       tau_ff_.template segment<6>(r.v_index).setZero();  // the root is not actuated
@@ -163,25 +116,13 @@ class ModelBasedController {
     has_ref_ = true;
   }
 
-  // How far the configuration q's lowest contact point is below the floor (>= 0, at most
-  // max_ground_lift): the predicted pose put on the avatar's feet penetrates it (its feet and
-  // soles are not the skeleton's).
+  // How far the configuration q's lowest contact point is below the floor (floor_penetration, at
+  // most max_ground_lift; 0 if not finite): the predicted pose put on the avatar's feet penetrates
+  // it (its feet and soles are not the skeleton's).
   S ground_lift(const ModelT& m, const VecQ& q) noexcept {
     dynamics::forward_kinematics(m, d_, q, static_cast<const VecV*>(nullptr), true);
     return ground_lift_of_kinematics(m);
   }
-
- private:
-  S ground_lift_of_kinematics(const ModelT& m) const noexcept {  // of the configuration in d_
-    S lo = 0;
-    for (int c = 0; c < m.num_points; ++c) {
-      const auto& pt = m.points[c];
-      lo = std::min(lo, dynamics::point_position(d_, pt.body, pt.pos).y() - pt.radius);
-    }
-    return std::isfinite(lo) ? std::min(-lo, S(cfg_.max_ground_lift)) : S(0);
-  }
-
- public:
 
   // Torques of one simulation step (the feed-forward, written into tau) and the simulator's root
   // servo set to the interpolated root reference (sim.root_servo, the root entries of targets()
@@ -227,35 +168,16 @@ class ModelBasedController {
 
  private:
   using Vec3 = dynamics::Vec3<S>;
-  // The floor carries the root wrench RNEA asked for: tau_leg -= J^T w on the stance legs, J from
-  // the reference's kinematics in dd.
-  void support(const ModelT& m, const dynamics::Data<S, MB, MD>& dd, const Vec3& F, const Vec3& N, const double (&contact)[2],
-               VecV& tau) noexcept {
-    const double cs = std::max(0.0, contact[0]) + std::max(0.0, contact[1]);
-    if (!(cs > 0.1)) return;  // flight: no support
-    for (int s = 0; s < 2; ++s) {
-      if (leg_len_[s] == 0 || !(contact[s] > 0)) continue;
-      const S share = S(contact[s] / cs);
-      J_.resize(6, m.nv);
-      // The root wrench (N about the root origin, F) received by the foot: its Jacobian at the root origin.
-      const Vec3 at = cfg_.support_moment ? Vec3(dd.R[foot_[s]].transpose() * (dd.p[root_] - dd.p[foot_[s]])) : Vec3::Zero();
-      dynamics::body_jacobian(m, dd, foot_[s], at, J_);
-      for (int c = 0; c < leg_len_[s]; ++c) {
-        const dynamics::Body<S>& b = m.bodies[leg_[s][c]];
-        for (int k = 0; k < m.nv_of(leg_[s][c]); ++k) {
-          S t = Vec3(J_.template block<3, 1>(3, b.v_index + k)).dot(share * F);
-          if (cfg_.support_moment) t += Vec3(J_.template block<3, 1>(0, b.v_index + k)).dot(share * N);
-          tau(b.v_index + k) -= t;
-        }
-      }
-    }
+
+  S ground_lift_of_kinematics(const ModelT& m) const noexcept {  // of the configuration in d_
+    const S depth = floor_penetration(m, d_);
+    return std::isfinite(depth) ? std::min(depth, S(cfg_.max_ground_lift)) : S(0);
   }
 
   ModelBasedControllerConfig cfg_;
   dynamics::Data<S, MB, MD> d_;  // RNEA workspace
   int root_ = 0;
-  int foot_[2] = {-1, -1}, leg_[2][3] = {}, leg_len_[2] = {};
-  Eigen::Matrix<S, 6, Eigen::Dynamic, 0, 6, MD> J_;
+  StanceSupport<S, MB, MD> support_;
   VecV tau_ff_, v0_, v1_, a_;
   Vec3 p_ref_ = Vec3::Zero(), from_p_ = Vec3::Zero(), v_ref_ = Vec3::Zero(), w_ref_ = Vec3::Zero();
   Quat R_ref_ = Quat::Identity(), from_R_ = Quat::Identity();
