@@ -37,4 +37,13 @@ inline sparsebody::trackers::TrackerFrame user_frame(int t, double speed) {
   return f;
 }
 
+// The pipeline's output pose (local rotations, root, world positions) is finite.
+template <class P>
+bool finite_output(const P& p) {
+  bool ok = p.pose().root_position.allFinite();
+  for (std::size_t j = 0; j < p.pose().local.size(); ++j)
+    ok &= p.pose().local[j].coeffs().allFinite() && p.world().position[j].allFinite();
+  return ok;
+}
+
 }  // namespace n3p_physics_test

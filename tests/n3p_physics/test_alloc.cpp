@@ -53,21 +53,18 @@ TEST_CASE("n3p physics: no allocation per simulation step (controller + correcti
   Physics::VecV tau = Physics::VecV::Zero(m.nv);
   const dynamics::Vec3<float> target[2] = {dynamics::Vec3<float>(0.5f, 1.2f, 0.3f), dynamics::Vec3<float>(-0.5f, 1.2f, 0.3f)};
   const bool present[2] = {true, true};
-  for (const auto mode : {control::ResidualMode::RootServo, control::ResidualMode::Distributed}) {
-    ctl.config().residual_mode = mode;
-    long long n = 0;
-    {
-      sparsebody_test::AllocationCounter counter;
-      for (int k = 0; k < 120; ++k) {
-        if (k % 4 == 0) ctl.set_reference(m, q0, q0, q0, 1.0f / 30, contact);
-        ctl.apply(m, sim, (k % 4 + 1) / 4.0f, tau);
-        tc.apply(m, sim.data(), target, present, tau);
-        sim.torques() = tau;
-        sim.step(1.0f / 120);
-        ctl.residual_applied(sim);
-      }
-      n = counter.count();
+  long long n = 0;
+  {
+    sparsebody_test::AllocationCounter counter;
+    for (int k = 0; k < 120; ++k) {
+      if (k % 4 == 0) ctl.set_reference(m, q0, q0, q0, 1.0f / 30, contact);
+      ctl.apply(m, sim, (k % 4 + 1) / 4.0f, tau);
+      tc.apply(m, sim.data(), target, present, tau);
+      sim.torques() = tau;
+      sim.step(1.0f / 120);
+      ctl.residual_applied(sim);
     }
-    CHECK(n == 0);
+    n = counter.count();
   }
+  CHECK(n == 0);
 }

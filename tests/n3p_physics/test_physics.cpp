@@ -9,17 +9,9 @@
 #include "n3p_physics/common.hpp"
 
 using namespace sparsebody;
+using n3p_physics_test::finite_output;
 using n3p_physics_test::Physics;
 using n3p_physics_test::user_frame;
-
-namespace {
-bool finite_output(const Physics& p) {
-  bool ok = p.pose().root_position.allFinite();
-  for (std::size_t j = 0; j < p.pose().local.size(); ++j)
-    ok &= p.pose().local[j].coeffs().allFinite() && p.world().position[j].allFinite();
-  return ok;
-}
-}  // namespace
 
 TEST_CASE("n3p physics retarget: q -> pose -> q is exact; the standing pose stands on the floor") {
   Physics p(n3p_physics_test::weights());

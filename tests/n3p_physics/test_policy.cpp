@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "n3p_physics/common.hpp"
 #include "support/alloc_counter.hpp"
 
 #include "sparsebody/avatar/n3p_physics.hpp"
@@ -124,9 +125,7 @@ TEST_CASE("n3p physics policy path: runs, recovers from falls, no allocation per
   CHECK(p.has_output());
   CHECK(p.policy_steps() >= 45);
   CHECK(p.residual_stats().force_max == 0);  // no non-physical help on the policy path
-  bool finite = p.pose().root_position.allFinite();
-  for (const auto& q : p.pose().local) finite &= q.coeffs().allFinite();
-  CHECK(finite);
+  CHECK(n3p_physics_test::finite_output(p));
   CHECK(p.simulator().data().p[0].y() > 0.0);
   const auto& s = p.control_predictor()->policy_input();
   bool s_finite = true;

@@ -9,15 +9,16 @@
 //          ControllerKind::Policy: the combined control predictor + learned policy pi
 //            (control/n3p_control_predictor.hpp), when policy weights are given;
 //          ControllerKind::ModelBased (default, no RL): targets = q_ref of the newest frame,
-//            held like the policy's with per_frame_targets = false; by default (measured better,
-//            see N3PPhysicsConfig) refreshed every frame to the reference 2 frames ahead of the
-//            tracked one instead; plus per frame velocity
-//            targets qd_ref, an inverse-dynamics feed-forward carried by the stance legs and a
-//            bounded residual wrench on the root (control/model_based_controller.hpp; its
-//            magnitude is reported every step: residual(), residual_stats());
+//            held like the policy's with per_frame_targets = false; by default (it tracks better)
+//            refreshed every frame to the reference 2 frames ahead of the tracked one instead;
+//            plus per frame velocity targets qd_ref, an inverse-dynamics feed-forward carried by
+//            the stance legs and a bounded residual wrench on the root
+//            (control/model_based_controller.hpp; its magnitude is reported every step:
+//            residual(), residual_stats());
 //     -> per substep: controller torques + tracker position correction (§6.2, Eq. (19),
 //        control/tracker_correction.hpp) -> Simulator::step(1/120)
 //     -> once per frame: fall detection (§9, control/fall_detector.hpp) -> reset to the reference
+//        (control/n3p_recovery.hpp)
 //     -> output: the simulated pose mapped back onto the standard skeleton.
 //
 // Delay (explicit, §3 / §8.4): the control step at frame t (after the trackers of frame t arrived)
@@ -36,7 +37,7 @@
 //   - a simulation step that fails (non-finite, velocity limit: dynamics::StepStatus) is rolled
 //     back by the simulator; the character is then reset to the reference pose;
 //   - a fall (FallDetector) resets the character to the reference pose (with the reference
-//     velocity) and the simulation resumes;
+//     velocity) and the simulation resumes (control/n3p_recovery.hpp);
 //   - the output is always finite: a pose that would not be keeps the last one.
 // Per frame: no allocation, no exception, no lock (tests/n3p_physics/test_alloc.cpp).
 #pragma once
@@ -46,61 +47,20 @@
 #include <memory>
 
 #include "sparsebody/avatar/n3p_direct.hpp"
+#include "sparsebody/avatar/n3p_physics_config.hpp"
+#include "sparsebody/avatar/n3p_reference_history.hpp"
 #include "sparsebody/character/avatar.hpp"
 #include "sparsebody/control/fall_detector.hpp"
+#include "sparsebody/control/floor_penetration.hpp"
 #include "sparsebody/control/model_based_controller.hpp"
 #include "sparsebody/control/n3p_control_predictor.hpp"
+#include "sparsebody/control/n3p_recovery.hpp"
 #include "sparsebody/control/n3p_sim_retarget.hpp"
+#include "sparsebody/control/residual_wrench.hpp"
 #include "sparsebody/control/tracker_correction.hpp"
 #include "sparsebody/dynamics/simulator.hpp"
 
 namespace sparsebody::avatar {
-
-enum class ControllerKind : unsigned char { ModelBased, Policy };
-
-struct N3PPhysicsConfig {
-  N3PConfig direct{};                           // the reference: direct mode (foot pinning + arm IK)
-  character::AvatarOptions avatar{};            // 1.75 m, 63 kg, kp 200, kd 20 (paper §7)
-  control::ModelBasedControllerConfig controller{};
-  control::TrackerCorrectionConfig correction{};  // kp 1000, kd 10 (§6.2)
-  control::FallDetectorConfig fall{};
-  int substeps = 4;                  // simulation steps per 30 Hz frame (120 Hz)
-  // Contact solves per simulation step (Simulator::contact.max_passes; the engine's default is 6).
-  // On walking input the light-contact iterations of the feet do not settle (the sliding damper
-  // and Fn feed each other back), so a step runs to the cap and its result depends on where it
-  // stops. Validation (301 clips, 3-point, delay removed), cap 3 / 4 / 5 / 6 / 8: falls 6 / 81 / 14
-  // / 30 / 25 in 1330 s, MPJPE 8.47 / 9.09 / 8.37 / 8.82 / 8.77 cm; bounded at 300 N: 95 vs 107
-  // falls at 3 vs 6. 3 also makes the benchmark frame 70 instead of 92 us. `--contact-passes`.
-  int contact_passes = 3;
-  // Model-based controller only:
-  // - per_frame_targets: PD targets refreshed every frame to the reference `target_lead` frames
-  //   ahead of the frame being tracked, instead of held for 3 frames (the policy's 10 Hz, §7).
-  //   Chosen by measurement (validation, 3-point, delay removed, the default otherwise): per frame
-  //   with lead 2: MPJPE 8.47 cm, 6 falls in 1330 s; lead 1: 8.52 cm, 11; held (the newest
-  //   reference, 1-3 frames ahead): 8.64 cm, 9. `--hold-targets 1` / `--target-lead` in the evaluation.
-  // - velocity_targets: the servos' velocity targets qd* = the reference velocity (every frame),
-  //   so kd damps the lag behind the motion instead of the motion itself.
-  // - ground_resets: a (re)start or fall reset puts the character on the reference lifted out of
-  //   the floor (control::ModelBasedController::ground_lift: the predicted pose on the avatar's
-  //   feet is 4.5 cm in it on average), not into it (validation: falls 155 -> 143).
-  // - support_on_contact: the stance support's share of a foot is its predicted contact c only
-  //   while the simulated foot touches the ground, 0 in the air (validation: falls 566 -> 212 with
-  //   the rest; flooring the share of a touching foot at 0.5 gave 254, ungated c 328).
-  bool per_frame_targets = true;
-  int target_lead = 2;
-  bool velocity_targets = true;
-  bool support_on_contact = true;
-  bool ground_resets = true;
-  double max_reference_jump = 0.5;   // m per frame of the reference root; more restarts the physics
-};
-
-// Running statistics of the residual root wrench over all simulation steps (N, N m).
-struct ResidualStats {
-  double force_sum = 0, torque_sum = 0, force_max = 0, torque_max = 0;
-  long long steps = 0;
-  double force_mean() const noexcept { return steps ? force_sum / steps : 0; }
-  double torque_mean() const noexcept { return steps ? torque_sum / steps : 0; }
-};
 
 // W: stored weight type of the networks (T, nn::f16 or nn::q8: see nn/int8.hpp).
 template <typename T = float, int HSig = 64, int HLo = 128, int HUp = 128, typename S = float, int MB = 24, int MD = 72,
@@ -118,6 +78,7 @@ class N3PPhysicsPipeline {
   static constexpr int kDelayFrames = 3;    // 0.1 s at 30 Hz (see the header comment)
   static constexpr int kControlPeriod = 3;  // frames per control step (10 Hz)
   static constexpr int kHistory = 8;        // reference frames kept (ring)
+  using History = N3PReferenceHistory<S, MB, MD, kHistory>;
 
   static Weights load(const std::string& path) { return Direct::load(path); }
 
@@ -133,14 +94,12 @@ class N3PPhysicsPipeline {
         retarget_(control::N3PSimRetarget<S, MB, MD>::from_meta(model_, direct_.meta())),
         controller_(model_, cfg.controller),
         correction_(model_, cfg.correction),
-        fall_(cfg.fall),
-        resampler_(direct_.meta().frame_rate) {
+        recovery_(model_, retarget_.body_of(0), cfg.fall, cfg.controller.ground_resets),
+        resampler_(direct_.meta().frame_rate),
+        history_(model_.neutral_configuration()) {
     if (policy) control_ = std::make_unique<ControlPredictor>(w, std::move(policy));
     sim_.options.contact.max_passes = cfg.contact_passes;
-    for (auto& q : ref_) q = model_.neutral_configuration();
     q_tmp_ = model_.neutral_configuration();
-    q_place_ = q_tmp_;
-    v_tmp_.setZero(model_.nv);
     tau_.setZero(model_.nv);
     pose_.resize(direct_.skeleton().size());
     last_pose_ = pose_;
@@ -165,17 +124,15 @@ class N3PPhysicsPipeline {
     if (!direct_.has_output()) return;
     // Reference of this frame.
     retarget_.to_q(model_, direct_.pose(), q_tmp_);
-    if (started_ && (q_tmp_.template head<3>() - ref(newest_).template head<3>()).norm() > S(cfg_.max_reference_jump))
+    if (started_ && (q_tmp_.template head<3>() - history_.q(history_.newest()).template head<3>()).norm() > S(cfg_.max_reference_jump))
       restart_ = true;
     if (!started_ || restart_) {
       start(q_tmp_, f.time);
     } else {
-      ++newest_;
-      ref(newest_) = q_tmp_;
-      hand(newest_, f.time);
+      history_.push(q_tmp_, direct_, retarget_, f.time);
     }
     simulate_frame();
-    if ((newest_ - first_) % kControlPeriod == 0) control_step();
+    if ((history_.newest() - history_.first()) % kControlPeriod == 0) control_step();
     output();
   }
 
@@ -183,14 +140,12 @@ class N3PPhysicsPipeline {
     direct_.reset();
     resampler_.reset();
     controller_.reset();
-    fall_.reset();
+    recovery_.reset();
     if (control_) control_->reset();
     started_ = restart_ = false;
     valid_output_ = false;
     residual_ = {};
     stats_ = {};
-    falls_ = sim_failures_ = restarts_ = 0;
-    falls_by_.fill(0);
   }
 
   // --- results --------------------------------------------------------------------------------
@@ -204,14 +159,14 @@ class N3PPhysicsPipeline {
   static constexpr double delay_seconds() noexcept { return kDelayFrames / 30.0; }
 
   // The reference configuration (retargeted prediction) the character tracks now (frame output_frame()).
-  const VecQ& reference() const noexcept { return ref_[slot(first_ + sim_frame_)]; }
+  const VecQ& reference() const noexcept { return history_.q(history_.first() + sim_frame_); }
   const control::ResidualWrench& residual() const noexcept { return residual_; }  // last step
-  const ResidualStats& residual_stats() const noexcept { return stats_; }
+  const control::ResidualStats& residual_stats() const noexcept { return stats_; }
   void clear_residual_stats() noexcept { stats_ = {}; }
-  long long falls() const noexcept { return falls_; }            // fall resets
-  long long falls(control::FallReason why) const noexcept { return falls_by_[static_cast<int>(why)]; }
-  long long sim_failures() const noexcept { return sim_failures_; }  // rolled-back steps -> reset
-  long long restarts() const noexcept { return restarts_; }      // physics (re)starts
+  long long falls() const noexcept { return recovery_.falls(); }  // fall resets
+  long long falls(control::FallReason why) const noexcept { return recovery_.falls(why); }
+  long long sim_failures() const noexcept { return recovery_.sim_failures(); }  // rolled-back steps -> reset
+  long long restarts() const noexcept { return recovery_.restarts(); }          // physics (re)starts
   ControllerKind controller_kind() const noexcept { return control_ ? ControllerKind::Policy : ControllerKind::ModelBased; }
   const ControlPredictor* control_predictor() const noexcept { return control_.get(); }
   ControlPredictor* control_predictor() noexcept { return control_.get(); }  // e.g. its tracker_ik switch
@@ -239,77 +194,30 @@ class N3PPhysicsPipeline {
   const N3PPhysicsConfig& config() const noexcept { return cfg_; }
 
   // Lowest point of the simulated body below the floor (m, >= 0): ground penetration.
-  double penetration() const noexcept {
-    double lo = 0;
-    const auto& d = sim_.data();
-    for (int k = 0; k < model_.num_points; ++k) {
-      const auto& c = model_.points[k];
-      lo = std::min(lo, double(dynamics::point_position(d, c.body, c.pos).y() - c.radius));
-    }
-    return -lo;
-  }
+  double penetration() const noexcept { return double(control::floor_penetration(model_, sim_.data())); }
 
  private:
-  static std::size_t slot(long long n) noexcept { return static_cast<std::size_t>(((n % kHistory) + kHistory) % kHistory); }
-  VecQ& ref(long long n) noexcept { return ref_[slot(n)]; }
-  // Reference of frame n, clamped to what exists since the last start.
-  const VecQ& ref_at(long long n) noexcept { return ref(std::clamp(n, first_, newest_)); }
-
-  void hand(long long n, double time) noexcept {
-    auto& h = hands_[slot(n)];
-    for (int s = 0; s < 2; ++s) {
-      h.present[s] = direct_.trackers_present()[1 + s];
-      h.p[s] = retarget_.to_sim_point(direct_.trackers()[1 + s].p).template cast<S>();
-    }
-    h.time = time;
-    h.trackers = direct_.trackers();
-    h.present_all = direct_.trackers_present();
-    h.contact[0] = direct_.contact_probability(0);
-    h.contact[1] = direct_.contact_probability(1);
-  }
-
   void start(const VecQ& q, double time) noexcept {
-    first_ = newest_ = started_ ? newest_ + 1 : 0;
-    ref(newest_) = q;
-    hand(newest_, time);
-    v_tmp_.setZero();
-    place(q, v_tmp_);
+    history_.start(started_ ? history_.newest() + 1 : 0, q, direct_, retarget_, time);
+    recovery_.start(model_, sim_, controller_, q);
     sim_.targets() = q;
     controller_.reset();
-    fall_.reset();
     if (control_) control_->start(direct_.trackers(), direct_.trackers_present());
     started_ = true;
     restart_ = false;
-    ++restarts_;
-  }
-
-  // The character in configuration q (lifted out of the floor with ground_resets), velocity v.
-  void place(const VecQ& q, const VecV& v) noexcept {
-    q_place_ = q;
-    if (cfg_.ground_resets) q_place_(model_.bodies[retarget_.body_of(0)].q_index + 1) += controller_.ground_lift(model_, q_place_);
-    sim_.set_state(q_place_, v);
-  }
-
-  // Puts the character on the reference of frame n with the reference velocity.
-  void reset_character(long long n) noexcept {
-    control::N3PSimRetarget<S, MB, MD>::velocity(model_, ref_at(n - 1), ref_at(n), S(1.0 / 30), v_tmp_);
-    if (!v_tmp_.allFinite()) v_tmp_.setZero();
-    place(ref_at(n), v_tmp_);
-    controller_.reset();
-    fall_.reset();
   }
 
   void simulate_frame() noexcept {
-    const long long F = std::max(first_, newest_ - kDelayFrames);  // the frame the character reaches now
-    sim_frame_ = F - first_;
+    const long long F = std::max(history_.first(), history_.newest() - kDelayFrames);  // the frame the character reaches now
+    sim_frame_ = F - history_.first();
     const S dt = S(1.0 / 30), h = dt / S(cfg_.substeps);
-    const auto& hd = hands_[slot(F)];
+    const auto& hd = history_.at(F);
     double support[2] = {hd.contact[0], hd.contact[1]};
-    if (cfg_.support_on_contact)  // stance support only for a foot the simulated character stands on
+    if (cfg_.controller.support_on_contact)  // stance support only for a foot the simulated character stands on
       for (int s = 0; s < 2; ++s) support[s] = contact(s) ? support[s] : 0.0;
-    controller_.set_reference(model_, ref_at(F - 2), ref_at(F - 1), ref_at(F), dt, support);
-    if (cfg_.per_frame_targets && !control_) sim_.targets() = ref_at(F + cfg_.target_lead);
-    if (!control_ && cfg_.velocity_targets) sim_.target_velocities() = controller_.reference_velocity();
+    controller_.set_reference(model_, history_.q(F - 2), history_.q(F - 1), history_.q(F), dt, support);
+    if (cfg_.controller.per_frame_targets && !control_) sim_.targets() = history_.q(F + cfg_.controller.target_lead);
+    if (!control_ && cfg_.controller.velocity_targets) sim_.target_velocities() = controller_.reference_velocity();
     out_time_ = hd.time;
     const bool policy = control_ != nullptr;
     for (int k = 0; k < cfg_.substeps; ++k) {
@@ -321,48 +229,32 @@ class N3PPhysicsPipeline {
       } else {
         controller_.apply(model_, sim_, alpha, tau_);
       }
-      correction_.apply(model_, sim_.data(), hd.p, hd.present, tau_);
+      correction_.apply(model_, sim_.data(), hd.hand, hd.hand_present, tau_);
       sim_.torques() = tau_;
       if (sim_.step(h) != dynamics::StepStatus::Ok) {
-        ++sim_failures_;
-        reset_character(F);
+        recovery_.after_failure(model_, sim_, controller_, history_.q(F - 1), history_.q(F));
         break;
       }
       if (!policy) residual_ = controller_.residual_applied(sim_);
-      stats_.force_sum += residual_.force;
-      stats_.torque_sum += residual_.torque;
-      stats_.force_max = std::max(stats_.force_max, residual_.force);
-      stats_.torque_max = std::max(stats_.torque_max, residual_.torque);
-      ++stats_.steps;
+      stats_.add(residual_);
     }
     // §9: loss of balance -> reset to the predicted pose, resume.
-    const auto& d = sim_.data();
-    const int r = retarget_.body_of(0);
-    const VecQ& qr = ref_at(F);
-    const Eigen::Quaterniond Rr(double(qr(3)), double(qr(4)), double(qr(5)), double(qr(6)));
-    const control::FallReason why = fall_.update(d.p[r].template cast<double>(), d.R[r].col(1).template cast<double>(),
-                                                 Eigen::Vector3d(double(qr(0)), double(qr(1)), double(qr(2))),
-                                                 Rr.normalized() * Eigen::Vector3d::UnitY());
-    if (why != control::FallReason::None) {
-      ++falls_;
-      ++falls_by_[static_cast<int>(why)];
-      reset_character(F);
-    }
+    recovery_.check(model_, sim_, controller_, history_.q(F - 1), history_.q(F));
   }
 
   // 10 Hz: the targets held for the next kControlPeriod frames.
   void control_step() noexcept {
     if (control_) {
-      if (newest_ - first_ < kControlPeriod) return;  // the start pose's targets until 3 frames exist
+      if (history_.newest() - history_.first() < kControlPeriod) return;  // the start pose's targets until 3 frames exist
       for (int k = 0; k < 3; ++k) {
-        const Hands& h = hands_[slot(newest_ - 2 + k)];
+        const auto& h = history_.at(history_.newest() - 2 + k);
         ctl_o_[k] = h.trackers;
-        ctl_present_[k] = h.present3();
+        ctl_present_[k] = h.present;
       }
       if (control_->control(ctl_o_, ctl_present_, model_, sim_.data(), retarget_, sim_.targets())) ++policy_steps_;
       return;
     }
-    sim_.targets() = ref(newest_);  // model-based: u = the newest predicted pose
+    sim_.targets() = history_.q(history_.newest());  // model-based: u = the newest predicted pose
   }
 
   void output() noexcept {
@@ -381,16 +273,6 @@ class N3PPhysicsPipeline {
     valid_output_ = true;
   }
 
-  struct Hands {
-    dynamics::Vec3<S> p[2] = {dynamics::Vec3<S>::Zero(), dynamics::Vec3<S>::Zero()};
-    bool present[2] = {false, false};
-    double time = 0;
-    double contact[2] = {1, 1};  // predicted c_L, c_R
-    features::n3p::TrackerSet trackers{};  // calibrated o (policy path)
-    std::array<bool, 3> present_all{};
-    const std::array<bool, 3>& present3() const noexcept { return present_all; }
-  };
-
   N3PPhysicsConfig cfg_;
   Direct direct_;
   std::unique_ptr<ControlPredictor> control_;
@@ -402,21 +284,18 @@ class N3PPhysicsPipeline {
   control::N3PSimRetarget<S, MB, MD> retarget_;
   control::ModelBasedController<S, MB, MD> controller_;
   control::TrackerCorrection<S, MB, MD> correction_;
-  control::FallDetector fall_;
+  control::N3PRecovery<S, MB, MD> recovery_;
   trackers::Resampler resampler_;
-  std::array<VecQ, kHistory> ref_;
-  std::array<Hands, kHistory> hands_{};
-  VecQ q_tmp_, q_place_;
-  VecV v_tmp_, tau_;
+  History history_;
+  VecQ q_tmp_;
+  VecV tau_;
   pose::BodyPose pose_, last_pose_;
   pose::WorldPose world_, last_world_;
-  long long first_ = 0, newest_ = 0, sim_frame_ = 0;
+  long long sim_frame_ = 0;
   double out_time_ = 0;
   bool started_ = false, restart_ = false, valid_output_ = false;
   control::ResidualWrench residual_;
-  ResidualStats stats_;
-  long long falls_ = 0, sim_failures_ = 0, restarts_ = 0;
-  std::array<long long, 4> falls_by_{};
+  control::ResidualStats stats_;
 };
 
 }  // namespace sparsebody::avatar

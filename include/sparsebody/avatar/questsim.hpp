@@ -55,10 +55,14 @@
 #pragma once
 #include <array>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <string>
 
+#include "sparsebody/avatar/questsim_config.hpp"
+#include "sparsebody/avatar/questsim_event.hpp"
 #include "sparsebody/character/avatar.hpp"
+#include "sparsebody/control/fall_detector.hpp"
 #include "sparsebody/control/questsim_observation.hpp"
 #include "sparsebody/networks/policy_nets.hpp"
 #include "sparsebody/nn/network.hpp"
@@ -66,49 +70,6 @@
 #include "sparsebody/trackers/sanitizer.hpp"
 
 namespace sparsebody::avatar {
-
-struct QuestSimConfig {
-  double control_rate = 36.0;      // Hz: policy rate (Appendix A: 1/36 s)
-  int substeps = 2;                // simulation substeps per control step (Appendix A)
-  double torque_scale = 200.0;     // N m per unit of policy output (Appendix A: [-1, 1] -> [-200, 200])
-  double joint_damping = 0.1;      // passive joint damping, N m s/rad (Appendix A: "friction of 0.1")
-  double eye_height_ratio = 0.936; // standing headset height / stature
-  double min_height = 1.0, max_height = 2.4;  // heights accepted by user_height_from_headset (m)
-  double fall_height_ratio = 0.5;  // root below this fraction of its standing height: fallen
-  double fall_tilt = 1.2;          // rad (~69 deg): root up-axis tilt beyond this: fallen
-  double max_gap = 0.25;           // s: resampler time gap that restarts
-  trackers::SanitizerConfig sanitizer{};
-};
-
-// What happened in a control tick.
-enum class QuestSimEvent : unsigned char {
-  Stepped = 0,        // observation, policy and substeps ran normally
-  Waiting,            // no valid headset frame yet: nothing simulated
-  TrackerReset,       // tracker restart (long loss, origin jump, time gap): character reset, then stepped
-  RejectedAction,     // non-finite observation or policy output: zero torques were applied
-  SimulationFailure,  // a substep failed (see last_sim_status()): character reset to standing
-  Fall,               // the character fell: reset to standing
-};
-inline const char* event_name(QuestSimEvent e) {
-  switch (e) {
-    case QuestSimEvent::Stepped: return "stepped";
-    case QuestSimEvent::Waiting: return "waiting";
-    case QuestSimEvent::TrackerReset: return "tracker reset";
-    case QuestSimEvent::RejectedAction: return "rejected action";
-    case QuestSimEvent::SimulationFailure: return "simulation failure";
-    default: return "fall";
-  }
-}
-
-// User height (m) from a frame where the user stands upright: headset height / eye_height_ratio.
-// NaN when the headset is invalid or non-finite, or the height is outside [min_height, max_height].
-inline double user_height_from_headset(const trackers::TrackerFrame& standing, const QuestSimConfig& cfg = {}) noexcept {
-  const int H = static_cast<int>(trackers::Tracker::Head);
-  const double y = standing.pose[H].position.y;
-  if (!standing.valid[H] || !std::isfinite(y)) return std::nan("");
-  const double h = y / cfg.eye_height_ratio;
-  return (h >= cfg.min_height && h <= cfg.max_height) ? h : std::nan("");
-}
 
 // S: simulation scalar; W: the policy's weight storage (float, or nn::f16); NF future frames;
 // NB / NJ: the avatar's bodies and non-root DoFs (the default avatar's unless a custom one is given).
@@ -155,7 +116,7 @@ class QuestSimPipeline {
     sim_->options.mode = dynamics::ControlMode::Torque;
     h_ = S(1.0 / (cfg.control_rate * cfg.substeps));
     standing_q_ = model.neutral_configuration();
-    standing_root_y_ = standing_q_(1);
+    fall_ = control::FallDetector<S>(fall_detector_config(cfg, standing_q_(1)));
     zero_v_ = Sim::VecV::Zero(model.nv);
     tau_ = zero_v_;
     sim_->torques().setZero();
@@ -241,7 +202,17 @@ class QuestSimPipeline {
   // Loss of balance: root below fall_height_ratio of its standing height, or tilted beyond fall_tilt.
   bool fallen() const noexcept {
     const auto& d = sim_->data();
-    return d.p[0].y() < S(cfg_.fall_height_ratio) * standing_root_y_ || d.R[0](1, 1) < S(std::cos(cfg_.fall_tilt));
+    return fall_.posture(d.p[0], d.R[0].col(1)) != control::FallReason::None;
+  }
+
+  // The fall rule above as a reference-free FallDetector: min_height = fall_height_ratio x the
+  // standing root height (the product in S), max_tilt = fall_tilt; no drop or divergence rule.
+  static control::FallDetectorConfig fall_detector_config(const QuestSimConfig& cfg, S standing_root_y) noexcept {
+    control::FallDetectorConfig f;
+    f.min_height = double(S(cfg.fall_height_ratio) * standing_root_y);
+    f.max_tilt = cfg.fall_tilt;
+    f.max_drop = f.max_error = std::numeric_limits<double>::infinity();
+    return f;
   }
 
   // The character standing in its reference pose under the headset of `frame`, facing the
@@ -304,7 +275,7 @@ class QuestSimPipeline {
   std::array<float, NJ> action_{};
   typename Sim::VecQ standing_q_;
   typename Sim::VecV zero_v_, tau_;
-  S standing_root_y_ = S(1);
+  control::FallDetector<S> fall_;
   bool started_ = false;
   QuestSimEvent last_event_ = QuestSimEvent::Waiting;
   dynamics::StepStatus last_sim_status_ = dynamics::StepStatus::Ok;

@@ -2,95 +2,48 @@
 // are not shipped) and stands in for the control policy pi of §5. Three parts, per simulation step:
 //
 //   1. PD targets  u = the predicted pose (q* of every internal joint), refreshed per frame or held
-//      until the next control step like the policy's output (avatar/n3p_physics.hpp,
-//      N3PPhysicsConfig::per_frame_targets); the simulator's servos (kp = 200, kd = 20, implicit
+//      until the next control step like the policy's output (per_frame_targets, applied by
+//      avatar/n3p_physics.hpp); the simulator's servos (kp = 200, kd = 20, implicit
 //      damping) turn it into torques, with velocity targets qd* = qd_ref.
 //   2. Feed-forward  tau_ff = RNEA(q_ref, qd_ref, qdd_ref), internal joints only, with qd_ref and
 //      qdd_ref finite-differenced from the predicted 30 Hz poses. It removes the servo's steady
 //      error under gravity and inertia (a PD servo alone sags by tau / kp). RNEA alone holds the
-//      body up by its root; the floor does that instead (stance_support): the root wrench
-//      w_root = (N, F) it asks for is handed to the feet in contact, shared by the contact
-//      weights c_L, c_R (w_s = c_s / (c_L + c_R) w_root), and the legs carry it:
-//        tau_leg(s) -= J_s^T w_s     (RNEA with external forces: tau = M qdd + C - J^T f_ext)
-//      on the DoFs of UpperLeg, LowerLeg, Foot, J_s the foot's Jacobian at the root origin (so
-//      the moment N is carried too, support_moment; without it the legs let the body tip).
+//      body up by its root; the floor does that instead (stance_support, control/stance_support.hpp):
+//      the root wrench w_root = (N, F) it asks for is shared by the feet in contact, and the
+//      stance legs carry it, tau_leg(s) -= J_s^T w_s (its moment N too with support_moment).
 //   3. Residual wrench  (PD on the root toward the predicted root, world frame)
-//        F = clamp(kp (p_ref - p) + kd (v_ref - v+), max_force)
-//        N = clamp(kr log(R_ref R^T) + dr (w_ref - w+), max_torque)
-//      ResidualMode::RootServo (default): applied to the root alone by the simulator's root servo
-//      (dynamics/root_servo.hpp), its damping at the next velocity v+, w+ implicit inside
-//      ABA exactly like the joint servos' kd (D_root = I^A + h K_r), so stiff gains on the 7 kg
-//      pelvis are stable at h = 1/120; the applied wrench never exceeds the bounds.
-//      ResidualMode::Distributed (the former default): explicit, as the external wrench field of a
-//      rigid-body acceleration of the whole body (distribute() below), the only stable way to apply
-//      it explicitly, with softer gains.
+//        F = clamp(kp_linear (p_ref - p) + kd_linear (v_ref - v+), max_force)
+//        N = clamp(kp_angular log(R_ref R^T) + kd_angular (w_ref - w+), max_torque)
+//      applied to the root alone by the simulator's root servo (dynamics/root_servo.hpp),
+//      its damping at the next velocity v+, w+ implicit inside ABA exactly like the joint servos'
+//      kd (D_root = I^A + h K_r), so stiff gains on the 7 kg pelvis are stable at h = 1/120; the
+//      applied wrench never exceeds the bounds.
 //      It is the help that keeps the character balanced and on the user's path (no learned
 //      balance strategy exists without RL). Its magnitude is reported every step
 //      (residual_applied() after the step; avatar/n3p_physics.hpp residual(), residual_stats())
 //      so users see how much help was needed; max_force defaults to the body weight (the help
-//      can hold the body up but never throw it; on average it gives 42 % of the weight).
+//      can hold the body up but never throw it).
 // The root reference is interpolated over the 4 substeps of a 30 Hz frame (linear / slerp) and
 // lifted out of the floor (ground_reference, ground_lift(): the predicted pose put on the avatar's
-// feet is 4.5 cm in the floor on average, and a root servo toward it pulls the body down on the
-// feet it stands on).
-// Validation clips (301, 3-point, `n3p_physics_eval`, N3PPhysicsPipeline defaults; each part
-// turned off in turn in the README, Neural3Points physics mode): falls 0.43 -> 0.005 per second,
-// MPJPE 12.29 -> 8.47 cm (delay removed) against the former default (Distributed, 300 N bound, no
-// stance support, no velocity targets, no acceleration feed-forward, reference in the floor, 6
-// contact solves per step). Without the stance support: 10.01 cm, 14 falls instead of 6;
-// ResidualMode::Distributed with the same rest: 10.67 cm, 15 falls.
+// feet is a few cm in the floor, and a root servo toward it pulls the body down on the feet it
+// stands on).
+// The defaults were chosen on the validation clips with examples/n3p_physics_eval.cpp; the
+// figures (each part turned off in turn, the bounds) are in the README (Neural3Points physics
+// mode), how they were reached in the commit log.
 // Per step: no allocation, no exception.
 #pragma once
 #include <algorithm>
-#include <array>
 #include <cmath>
 
+#include "sparsebody/control/floor_penetration.hpp"
+#include "sparsebody/control/model_based_controller_config.hpp"
 #include "sparsebody/control/n3p_sim_retarget.hpp"
-#include "sparsebody/dynamics/jacobian.hpp"
+#include "sparsebody/control/residual_wrench.hpp"
+#include "sparsebody/control/stance_support.hpp"
 #include "sparsebody/dynamics/rnea.hpp"
 #include "sparsebody/dynamics/simulator.hpp"
 
 namespace sparsebody::control {
-
-// Where the residual wrench acts.
-enum class ResidualMode : unsigned char {
-  RootServo,    // on the root alone, its damping implicit in the simulator's ABA (default)
-  Distributed,  // explicit, spread over all bodies as a rigid-body acceleration field
-};
-
-struct ModelBasedControllerConfig {
-  ResidualMode residual_mode = ResidualMode::RootServo;
-  // Residual gains. Validation clips, 3-point, RootServo: force gains 5000 / 1000 gave 212 falls,
-  // 3000 / 600 220, 8000 / 1500 227 (2000 / 200 is what the explicit Distributed mode tolerates);
-  // torque gains 1000 / 100: 212, 2000 / 200: 226, 500 / 50: 246.
-  double root_kp = 5000;     // N/m    residual force, position gain (p_ref - p)
-  double root_kd = 1000;     // N s/m  residual force, velocity gain
-  double root_kr = 1000;     // N m/rad residual torque, orientation gain
-  double root_dr = 100;      // N m s/rad residual torque, angular velocity gain
-  bool ground_reference = true;    // root target lifted out of the floor (ground_lift())
-  double max_ground_lift = 0.1;    // m
-  // Bounds, chosen on the validation clips (301, 3-point, N3PPhysicsPipeline defaults; falls in
-  // 1330 s / MPJPE / mean |F|): 300 N, 150 N m: 104 / 9.54 cm / 197 N;  500 N, 250 N m: 20 / 8.70
-  // cm / 243 N;  620 N, 250 N m: 6 / 8.47 cm / 254 N;  700 N, 250 N m: 4 / 8.27 cm / 255 N.
-  // The default force bound is the avatar's weight (63 kg x 9.81 = 618 N): the help can at most
-  // hold the body up, never throw it; on average the feet still carry about 60 % of the weight.
-  double max_force = 620;    // N   |F| bound
-  double max_torque = 250;   // N m |N| bound
-  double feedforward_scale = 1.0;  // 0 disables the inverse-dynamics feed-forward
-  bool stance_support = true;      // the stance legs carry the root wrench RNEA asks for (J^T w)
-  bool support_moment = true;      // ... its moment too, not only its force
-  bool support_at_state = false;   // ... through the legs' Jacobians at the simulated state, per step
-                                   // (validation: MPJPE 10.70 -> 10.18 cm but falls 226 -> 307)
-  double acceleration_scale = 0.5; // weight of the finite-differenced qdd_ref in RNEA (30 Hz second
-                                   // differences are noisy; validation: 0 / 0.3 / 0.5 / 0.7 / 1 gave
-                                   // MPJPE 10.03 / 9.82 / 9.59 / 9.54 / 9.83 cm, falls 143 / 138 /
-                                   // 130 / 146 / 151, skating 28.7 / 27.1 / 26.6 / 29.0 / 33.7 cm/s)
-};
-
-// Size of the residual wrench of the last step (N, N m).
-struct ResidualWrench {
-  double force = 0, torque = 0;
-};
 
 template <class S, int MB, int MD>
 class ModelBasedController {
@@ -101,15 +54,8 @@ class ModelBasedController {
   using Quat = dynamics::Quat<S>;
 
   explicit ModelBasedController(const ModelT& m, ModelBasedControllerConfig cfg = {}) : cfg_(cfg), d_(m) {
-    for (int i = 0; i < m.nb; ++i)
-      if (m.bodies[i].joint == dynamics::JointType::Free) root_ = i;
-    const char* feet[2] = {"Foot_L", "Foot_R"};
-    for (int s = 0; s < 2; ++s) {
-      foot_[s] = m.find(feet[s]);
-      int n = 0;
-      for (int b = foot_[s]; b >= 0 && b != root_ && n < 3; b = m.bodies[b].parent) leg_[s][n++] = b;
-      leg_len_[s] = foot_[s] >= 0 ? n : 0;
-    }
+    root_ = std::max(0, m.root_body());
+    support_ = StanceSupport<S, MB, MD>(m, root_);
     tau_ff_.setZero(m.nv);
     v0_.setZero(m.nv);
     v1_.setZero(m.nv);
@@ -123,7 +69,6 @@ class ModelBasedController {
   void reset() noexcept {
     tau_ff_.setZero();
     has_ref_ = false;
-    support_on_ = false;
     last_ = {};
   }
 
@@ -141,21 +86,14 @@ class ModelBasedController {
     const dynamics::Body<S>& r = m.bodies[root_];
     if (cfg_.feedforward_scale != 0) {
       dynamics::rnea(m, d_, q, v1_, a_, tau_ff_);  // leaves d_ with q's kinematics, not world ones
-      support_on_ = false;
       if (cfg_.stance_support) {
         // The root wrench in the world (RNEA's root entries are body-frame), about the root origin.
         const dynamics::Mat3<S> Rq = dynamics::read_quat<S>(q, r.q_index + 3).toRotationMatrix();
-        support_F_ = Rq * Vec3(tau_ff_.template segment<3>(r.v_index + 3));
-        support_N_ = Rq * Vec3(tau_ff_.template segment<3>(r.v_index));
-        support_c_[0] = contact[0];
-        support_c_[1] = contact[1];
-        if (cfg_.support_at_state) {
-          support_on_ = support_F_.allFinite() && support_N_.allFinite();
-        } else {
-          dynamics::forward_kinematics(m, d_, q, &v1_, true);
-          fk_of_q_ = true;
-          support(m, d_, support_F_, support_N_, contact, S(1), tau_ff_);
-        }
+        const Vec3 F = Rq * Vec3(tau_ff_.template segment<3>(r.v_index + 3));
+        const Vec3 N = Rq * Vec3(tau_ff_.template segment<3>(r.v_index));
+        dynamics::forward_kinematics(m, d_, q, &v1_, true);
+        fk_of_q_ = true;
+        support_.apply(m, d_, F, N, contact, cfg_.support_moment, tau_ff_);
       }
       tau_ff_ *= S(cfg_.feedforward_scale);
       tau_ff_.template segment<6>(r.v_index).setZero();  // the root is not actuated
@@ -177,76 +115,47 @@ class ModelBasedController {
     has_ref_ = true;
   }
 
-  // How far the configuration q's lowest contact point is below the floor (>= 0, at most
-  // max_ground_lift): the predicted pose put on the avatar's feet penetrates it by 4.5 cm on
-  // average on the validation clips (its feet and soles are not the skeleton's).
+  // How far the configuration q's lowest contact point is below the floor (floor_penetration, at
+  // most max_ground_lift; 0 if not finite): the predicted pose put on the avatar's feet penetrates
+  // it (its feet and soles are not the skeleton's).
   S ground_lift(const ModelT& m, const VecQ& q) noexcept {
     dynamics::forward_kinematics(m, d_, q, static_cast<const VecV*>(nullptr), true);
     return ground_lift_of_kinematics(m);
   }
 
- private:
-  S ground_lift_of_kinematics(const ModelT& m) const noexcept {  // of the configuration in d_
-    S lo = 0;
-    for (int c = 0; c < m.num_points; ++c) {
-      const auto& pt = m.points[c];
-      lo = std::min(lo, dynamics::point_position(d_, pt.body, pt.pos).y() - pt.radius);
-    }
-    return std::isfinite(lo) ? std::min(-lo, S(cfg_.max_ground_lift)) : S(0);
-  }
-
- public:
-
-  // Torques of one simulation step (written into tau: feed-forward, plus the residual wrench in
-  // ResidualMode::Distributed) and, in ResidualMode::RootServo, the simulator's root servo set to
-  // the interpolated root reference (sim.options.root_servo, the root entries of targets() and
-  // target_velocities()); the wrench it applies is known after the step: residual_applied(sim).
+  // Torques of one simulation step (the feed-forward, written into tau) and the simulator's root
+  // servo set to the interpolated root reference (sim.options.root_servo, the root entries of targets()
+  // and target_velocities()); the wrench it applies is known after the step: residual_applied(sim).
   // alpha in [0, 1]: how far through the current reference frame this step ends.
   ResidualWrench apply(const ModelT& m, dynamics::Simulator<S, MB, MD>& sim, S alpha, VecV& tau) noexcept {
     tau = tau_ff_;
-    if (support_on_) support(m, sim.data(), support_F_, support_N_, support_c_, S(cfg_.feedforward_scale), tau);
     last_ = {};
     auto& servo = sim.options.root_servo;
     servo.enabled = false;
     if (!has_ref_) return last_;
     const Vec3 pr = from_p_ + alpha * (p_ref_ - from_p_);
     const Quat Rr = from_R_.slerp(alpha, R_ref_);
-    if (cfg_.residual_mode == ResidualMode::RootServo) {
-      const dynamics::Body<S>& r = m.bodies[root_];
-      servo.enabled = true;
-      servo.kp_linear = S(cfg_.root_kp);
-      servo.kd_linear = S(cfg_.root_kd);
-      servo.kp_angular = S(cfg_.root_kr);
-      servo.kd_angular = S(cfg_.root_dr);
-      servo.max_force = S(cfg_.max_force);
-      servo.max_torque = S(cfg_.max_torque);
-      auto& qt = sim.targets();
-      qt.template segment<3>(r.q_index) = pr;
-      qt(r.q_index + 3) = Rr.w();
-      qt.template segment<3>(r.q_index + 4) = Rr.vec();
-      auto& vt = sim.target_velocities();  // target body frame: (R_r^T w_ref, R_r^T v_ref)
-      vt.template segment<3>(r.v_index) = Rr.conjugate() * w_ref_;
-      vt.template segment<3>(r.v_index + 3) = Rr.conjugate() * v_ref_;
-      return last_;
-    }
-    const dynamics::Data<S, MB, MD>& d = sim.data();
-    const dynamics::Mat3<S>& R = d.R[root_];
-    const Vec3 w = R * Vec3(d.v[root_].template head<3>()), v = R * Vec3(d.v[root_].template tail<3>());
-    Vec3 F = S(cfg_.root_kp) * (pr - d.p[root_]) + S(cfg_.root_kd) * (v_ref_ - v);
-    Vec3 N = S(cfg_.root_kr) * dynamics::quat_log(Quat(Rr * Quat(R).conjugate())) + S(cfg_.root_dr) * (w_ref_ - w);
-    clamp(F, S(cfg_.max_force));
-    clamp(N, S(cfg_.max_torque));
-    if (!F.allFinite() || !N.allFinite()) return last_;
-    distribute(m, d, F, N, tau);  // ResidualMode::Distributed
-    last_.force = double(F.norm());
-    last_.torque = double(N.norm());
+    const dynamics::Body<S>& r = m.bodies[root_];
+    servo.enabled = true;
+    servo.kp_linear = S(cfg_.kp_linear);
+    servo.kd_linear = S(cfg_.kd_linear);
+    servo.kp_angular = S(cfg_.kp_angular);
+    servo.kd_angular = S(cfg_.kd_angular);
+    servo.max_force = S(cfg_.max_force);
+    servo.max_torque = S(cfg_.max_torque);
+    auto& qt = sim.targets();
+    qt.template segment<3>(r.q_index) = pr;
+    qt(r.q_index + 3) = Rr.w();
+    qt.template segment<3>(r.q_index + 4) = Rr.vec();
+    auto& vt = sim.target_velocities();  // target body frame: (R_r^T w_ref, R_r^T v_ref)
+    vt.template segment<3>(r.v_index) = Rr.conjugate() * w_ref_;
+    vt.template segment<3>(r.v_index + 3) = Rr.conjugate() * v_ref_;
     return last_;
   }
 
-  // The residual wrench of the step just taken (call after sim.step): the root servo's applied
-  // wrench in ResidualMode::RootServo, the distributed resultant otherwise.
+  // The residual wrench of the step just taken (call after sim.step): the root servo's applied wrench.
   ResidualWrench residual_applied(const dynamics::Simulator<S, MB, MD>& sim) noexcept {
-    if (cfg_.residual_mode == ResidualMode::RootServo && sim.options.root_servo.enabled) {
+    if (sim.options.root_servo.enabled) {
       last_.force = double(sim.root_servo_force().norm());
       last_.torque = double(sim.root_servo_torque().norm());
     }
@@ -258,91 +167,21 @@ class ModelBasedController {
 
  private:
   using Vec3 = dynamics::Vec3<S>;
-  // The resultant (F, N about the centre of mass) as the external wrench field of a rigid-body
-  // acceleration: each body gets w_i = (m_i (a + alpha x r_i), I_i alpha) with a = F / M,
-  // alpha = I_c^-1 N (I_c: composite inertia about the COM, r_i: body COM from the body COM), so
-  // the sum over bodies is exactly (F, N) and the help moves the body as a whole instead of jerking
-  // the light pelvis against the stiff servos (a wrench on the root alone, with explicit damping,
-  // is unstable at h = 1/120 for the 7 kg pelvis). Generalised torques tau += sum_i J_i^T w_i,
-  // by one backward pass as in RNEA.
-  void distribute(const ModelT& m, const dynamics::Data<S, MB, MD>& d, const Vec3& F, const Vec3& N, VecV& tau) noexcept {
-    Vec3 c = Vec3::Zero();
-    S M = 0;
-    for (int i = 0; i < m.nb; ++i) {
-      x_[i] = dynamics::point_position(d, i, m.bodies[i].com);
-      c += m.bodies[i].mass * x_[i];
-      M += m.bodies[i].mass;
-    }
-    c /= M;
-    dynamics::Mat3<S> Ic = dynamics::Mat3<S>::Zero();
-    for (int i = 0; i < m.nb; ++i) {
-      const Vec3 r = x_[i] - c;
-      Ic += d.R[i] * m.bodies[i].inertia * d.R[i].transpose() +
-            m.bodies[i].mass * (r.squaredNorm() * dynamics::Mat3<S>::Identity() - r * r.transpose());
-    }
-    const Vec3 a = F / M, al = Ic.inverse() * N;
-    for (int i = 0; i < m.nb; ++i) {
-      const Vec3 f = m.bodies[i].mass * (a + al.cross(x_[i] - c));
-      const Vec3 n = d.R[i] * m.bodies[i].inertia * d.R[i].transpose() * al + (x_[i] - d.p[i]).cross(f);
-      fb_[i].template head<3>() = d.R[i].transpose() * n;  // about the body origin, body frame
-      fb_[i].template tail<3>() = d.R[i].transpose() * f;
-    }
-    for (int i = m.nb - 1; i >= 0; --i) {
-      const dynamics::Body<S>& b = m.bodies[i];
-      switch (b.joint) {
-        case dynamics::JointType::Free: tau.template segment<6>(b.v_index) += fb_[i]; break;
-        case dynamics::JointType::Spherical: tau.template segment<3>(b.v_index) += fb_[i].template head<3>(); break;
-        case dynamics::JointType::Revolute: tau(b.v_index) += b.axis.dot(fb_[i].template head<3>()); break;
-        case dynamics::JointType::Fixed: break;
-      }
-      if (b.parent >= 0) fb_[b.parent] += d.X[i].apply_transpose_force(fb_[i]);
-    }
-  }
 
-  // The floor carries the root wrench RNEA asked for: tau_leg -= J^T w on the stance legs, J from
-  // the kinematics in dd (the reference's, or the simulated character's: support_at_state).
-  void support(const ModelT& m, const dynamics::Data<S, MB, MD>& dd, const Vec3& F, const Vec3& N, const double (&contact)[2],
-               S scale, VecV& tau) noexcept {
-    const double cs = std::max(0.0, contact[0]) + std::max(0.0, contact[1]);
-    if (!(cs > 0.1)) return;  // flight: no support
-    for (int s = 0; s < 2; ++s) {
-      if (leg_len_[s] == 0 || !(contact[s] > 0)) continue;
-      const S share = scale * S(contact[s] / cs);
-      J_.resize(6, m.nv);
-      // The root wrench (N about the root origin, F) received by the foot: its Jacobian at the root origin.
-      const Vec3 at = cfg_.support_moment ? Vec3(dd.R[foot_[s]].transpose() * (dd.p[root_] - dd.p[foot_[s]])) : Vec3::Zero();
-      dynamics::body_jacobian(m, dd, foot_[s], at, J_);
-      for (int c = 0; c < leg_len_[s]; ++c) {
-        const dynamics::Body<S>& b = m.bodies[leg_[s][c]];
-        for (int k = 0; k < m.nv_of(leg_[s][c]); ++k) {
-          S t = Vec3(J_.template block<3, 1>(3, b.v_index + k)).dot(share * F);
-          if (cfg_.support_moment) t += Vec3(J_.template block<3, 1>(0, b.v_index + k)).dot(share * N);
-          tau(b.v_index + k) -= t;
-        }
-      }
-    }
-  }
-
-  static void clamp(Vec3& x, S limit) noexcept {
-    const S n = x.norm();
-    if (n > limit && n > S(0)) x *= limit / n;
+  S ground_lift_of_kinematics(const ModelT& m) const noexcept {  // of the configuration in d_
+    const S depth = floor_penetration(m, d_);
+    return std::isfinite(depth) ? std::min(depth, S(cfg_.max_ground_lift)) : S(0);
   }
 
   ModelBasedControllerConfig cfg_;
   dynamics::Data<S, MB, MD> d_;  // RNEA workspace
   int root_ = 0;
-  int foot_[2] = {-1, -1}, leg_[2][3] = {}, leg_len_[2] = {};
-  Eigen::Matrix<S, 6, Eigen::Dynamic, 0, 6, MD> J_;
-  std::array<Vec3, MB> x_{};
-  std::array<dynamics::Vec6<S>, MB> fb_{};
+  StanceSupport<S, MB, MD> support_;
   VecV tau_ff_, v0_, v1_, a_;
   Vec3 p_ref_ = Vec3::Zero(), from_p_ = Vec3::Zero(), v_ref_ = Vec3::Zero(), w_ref_ = Vec3::Zero();
   Quat R_ref_ = Quat::Identity(), from_R_ = Quat::Identity();
   bool has_ref_ = false;
-  Vec3 support_F_ = Vec3::Zero(), support_N_ = Vec3::Zero();  // root wrench the stance legs carry (world)
-  double support_c_[2] = {0, 0};
-  bool support_on_ = false;  // support_at_state: added per step in apply()
-  bool fk_of_q_ = false;     // d_ holds the world kinematics of set_reference's q
+  bool fk_of_q_ = false;  // d_ holds the world kinematics of set_reference's q
   ResidualWrench last_;
 };
 
