@@ -192,7 +192,7 @@ class QuestSimObservationBuilder {
   // Foot bodies by name: "Foot_L", "Toes_L" (left) and "Foot_R", "Toes_R" (right); absent names
   // are skipped (a model without toes works), but each side needs at least one body.
   explicit QuestSimObservationBuilder(const ModelT& m) {
-    if (m.nb != NB || m.nv != NJ + 6 || m.nb == 0 || m.bodies[0].joint != dynamics::JointType::Free)
+    if (m.nb != NB || m.nv != NJ + 6 || m.nb == 0 || m.root_body() != 0)
       throw std::invalid_argument("QuestSimObservationBuilder: model has " + std::to_string(m.nb) + " bodies and nv " +
                                   std::to_string(m.nv) + " (free root expected), the layout is for " +
                                   std::to_string(NB) + " bodies and nv " + std::to_string(NJ + 6));
