@@ -268,7 +268,7 @@ class BvhWriter {
       for (int a = j; a >= 0 && a != next_parent; a = s_.parents[a])
         out << std::string(static_cast<std::size_t>(depth[a]) * 2, ' ') << "}\n";
     }
-    out << "MOTION\n_frames: " << lines_.size() << "\n_frame Time: " << std::setprecision(8) << frame_time_ << "\n";
+    out << "MOTION\nFrames: " << lines_.size() << "\nFrame Time: " << std::setprecision(8) << frame_time_ << "\n";
     for (const auto& l : lines_) out << l << "\n";
   }
 
