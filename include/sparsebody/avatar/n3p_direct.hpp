@@ -33,13 +33,12 @@
 #include <cmath>
 #include <string>
 
-#include "sparsebody/predict/n3p_predictor.hpp"
+#include "sparsebody/avatar/pipeline_front_end.hpp"
 #include "sparsebody/features/n3p_calibration.hpp"
 #include "sparsebody/pose/body_pose.hpp"
 #include "sparsebody/pose/ik.hpp"
 #include "sparsebody/pose/joint_map.hpp"
-#include "sparsebody/trackers/resampler.hpp"
-#include "sparsebody/trackers/sanitizer.hpp"
+#include "sparsebody/predict/n3p_predictor.hpp"
 
 namespace sparsebody::avatar {
 
@@ -104,7 +103,9 @@ class FootPin {
 };
 
 template <typename T = float, int HSig = 64, int HLo = 128, int HUp = 128, typename W = T>
-class N3PPipeline {
+class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
+  using Base = PipelineFrontEnd<N3PPipeline>;
+
  public:
   using Predictor = predict::N3PPredictor<T, HSig, HLo, HUp, W>;
   using Weights = typename Predictor::Weights;
@@ -113,13 +114,10 @@ class N3PPipeline {
   static Weights load(const std::string& path) { return Predictor::load(path); }
 
   explicit N3PPipeline(const Weights& w, N3PConfig cfg = {})
-      : cfg_(cfg), pred_(w), sanitizer_(cfg.sanitizer), resampler_(pred_.meta().frame_rate) {
+      : cfg_(cfg), pred_(w) {
     const pose::Skeleton& s = pred_.skeleton();
     map_ = pose::JointMap::from_names(s, w.lo->info().source);
-    pose_.resize(s.size());
-    last_pose_.resize(s.size());
-    world_.resize(s.size());
-    last_world_.resize(s.size());
+    this->start_front_end(pred_.meta().frame_rate, cfg.sanitizer, s.size());
     auto f = [&](const char* n) { return s.find(n); };
     const char* arm[2][3] = {{"UpperArm_L", "LowerArm_L", "Hand_L"}, {"UpperArm_R", "LowerArm_R", "Hand_R"}};
     const char* leg[2][3] = {{"UpperLeg_L", "LowerLeg_L", "Foot_L"}, {"UpperLeg_R", "LowerLeg_R", "Foot_R"}};
@@ -143,17 +141,12 @@ class N3PPipeline {
   }
 
   // --- running ------------------------------------------------------------------------------
-  // One input frame at any rate; runs one model step per 30 Hz tick it completes. Returns the
-  // number of steps run.
-  int push(const trackers::TrackerFrame& f) noexcept {
-    return resampler_.push(f, [this](const trackers::TrackerFrame& tick, bool gap) { step(tick, gap); });
-  }
-
+  // push(frame) (any rate, PipelineFrontEnd) runs step once per 30 Hz tick.
   // One model frame (the caller did the resampling). `restart`: state reset before this frame.
   void step(const trackers::TrackerFrame& f, bool restart = false) noexcept {
     trackers::TrackerFrame head_only = f;  // the sanitizer looks after the headset only
     head_only.valid[1] = head_only.valid[2] = head_only.valid[3] = false;
-    const trackers::SanitizedFrame& s = sanitizer_.process(head_only, 1.0 / pred_.meta().frame_rate);
+    const trackers::SanitizedFrame& s = stream_.sanitize(head_only);
     if (restart || s.reset) reset_state();
     ++frames_;
     if (!s.usable) return;  // no headset yet: no output (or the last one is kept)
@@ -168,38 +161,24 @@ class N3PPipeline {
     trackers_ = o;
     present_ = present;
     if (!pred_.step(o, present)) return;
-    pose_ = pred_.pose();  // same size: no allocation
-    pose::forward_kinematics(pred_.skeleton(), pose_, world_);
+    out_.pose() = pred_.pose();  // same size: no allocation
+    pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
     if (cfg_.foot_ik) pin_feet();
     if (cfg_.hand_ik)
       for (int side = 0; side < 2; ++side)
         if (present[1 + side]) limb_to(arm_[side], o[1 + side].p);
-    if (cfg_.foot_ik || cfg_.hand_ik) pose::forward_kinematics(pred_.skeleton(), pose_, world_);
-    if (!finite_pose()) {  // never hand out a NaN: keep the last pose and restart
-      reset_state();
-      pose_ = last_pose_;
-      world_ = last_world_;
-      return;
-    }
-    last_pose_ = pose_;
-    last_world_ = world_;
-    valid_output_ = true;
+    if (cfg_.foot_ik || cfg_.hand_ik) pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
+    if (!out_.commit()) reset_state();  // never hand out a NaN: the last pose is kept; restart
   }
 
   void reset() noexcept {
     reset_state();
-    sanitizer_.reset();
-    resampler_.reset();
-    frames_ = 0;
-    valid_output_ = false;
+    this->reset_front_end();
   }
 
   // --- results ------------------------------------------------------------------------------
-  // The pose on the standard skeleton in its scale (metres); multiply positions and offsets by
-  // user_scale() for the user's size. Valid when has_output().
-  const pose::BodyPose& pose() const noexcept { return pose_; }
-  const pose::WorldPose& world() const noexcept { return world_; }
-  bool has_output() const noexcept { return valid_output_; }
+  // pose(), world(), has_output(), frames() (PipelineFrontEnd): the pose on the standard skeleton
+  // in its scale (metres); multiply positions and offsets by user_scale() for the user's size.
   double user_scale() const noexcept { return 1.0 / calib_.base.scale; }
   const pose::Skeleton& skeleton() const noexcept { return pred_.skeleton(); }
   const pose::JointMap& joint_map() const noexcept { return map_; }
@@ -210,7 +189,6 @@ class N3PPipeline {
   bool foot_locked(int foot) const noexcept { return lock_[foot].state() != FootPin::State::Free; }
   // Controllers replaced by o* in the last frame (0: 3-point, 1: one controller, 2: HMD only).
   int predicted_controllers() const noexcept { return pred_.substituted(1) + pred_.substituted(2); }
-  long long frames() const noexcept { return frames_; }
   // The calibrated trackers of the last usable frame (joint poses, standard-skeleton scale) and which
   // were measured (the others are stale); read by the physics mode's combined control predictor.
   const features::n3p::TrackerSet& trackers() const noexcept { return trackers_; }
@@ -218,6 +196,10 @@ class N3PPipeline {
   const N3PConfig& config() const noexcept { return cfg_; }
 
  private:
+  using Base::frames_;
+  using Base::out_;
+  using Base::stream_;
+
   void reset_state() noexcept {
     pred_.reset();
     lock_[0].reset();
@@ -238,22 +220,15 @@ class N3PPipeline {
     return true;
   }
 
-  bool finite_pose() const noexcept {
-    bool ok = pose_.root_position.allFinite();
-    for (std::size_t j = 0; j < pose_.local.size(); ++j)
-      ok &= pose_.local[j].coeffs().allFinite() && world_.position[j].allFinite();
-    return ok;
-  }
-
   // Feet in contact stay where contact began (FootPin), the leg bent to reach them.
   void pin_feet() noexcept {
     for (int side = 0; side < 2; ++side) {
       const int* l = leg_[side];
       Eigen::Vector3d target;
-      if (lock_[side].update(contact(side), world_.position[l[2]], world_.position[l[0]], reach_[side], cfg_.foot_max_drift,
+      if (lock_[side].update(contact(side), out_.world().position[l[2]], out_.world().position[l[0]], reach_[side], cfg_.foot_max_drift,
                              target)) {
         limb_to(l, target);
-        pose::forward_kinematics(pred_.skeleton(), pose_, world_);
+        pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
       }
     }
   }
@@ -261,36 +236,30 @@ class N3PPipeline {
   // Two-bone IK on the chain a -> b -> c (c's world rotation kept): c goes to `target`.
   void limb_to(const int* j, const Eigen::Vector3d& target) noexcept {
     const int a = j[0], b = j[1], c = j[2];
-    const Eigen::Vector3d pa = world_.position[a], pb = world_.position[b], pc = world_.position[c];
+    const Eigen::Vector3d pa = out_.world().position[a], pb = out_.world().position[b], pc = out_.world().position[c];
     Eigen::Vector3d nb, nc;
     pose::two_bone(pa, pb, pc, target, pb - pa, nb, nc);
     const Eigen::Quaterniond s1 = pose::swing(pb - pa, nb - pa);
-    const Eigen::Quaterniond qa = (s1 * world_.rotation[a]).normalized();
-    const Eigen::Quaterniond qb = (pose::swing(s1 * (pc - pb), nc - nb) * s1 * world_.rotation[b]).normalized();
-    const Eigen::Quaterniond qc = world_.rotation[c];
+    const Eigen::Quaterniond qa = (s1 * out_.world().rotation[a]).normalized();
+    const Eigen::Quaterniond qb = (pose::swing(s1 * (pc - pb), nc - nb) * s1 * out_.world().rotation[b]).normalized();
+    const Eigen::Quaterniond qc = out_.world().rotation[c];
     const int pa_parent = pred_.skeleton().parents[a];
-    pose_.local[a] = pa_parent < 0 ? qa : Eigen::Quaterniond(world_.rotation[pa_parent].conjugate() * qa);
-    pose_.local[b] = qa.conjugate() * qb;
-    pose_.local[c] = qb.conjugate() * qc;
-    world_.rotation[a] = qa;
-    world_.rotation[b] = qb;
+    out_.pose().local[a] = pa_parent < 0 ? qa : Eigen::Quaterniond(out_.world().rotation[pa_parent].conjugate() * qa);
+    out_.pose().local[b] = qa.conjugate() * qb;
+    out_.pose().local[c] = qb.conjugate() * qc;
+    out_.world().rotation[a] = qa;
+    out_.world().rotation[b] = qb;
   }
 
   N3PConfig cfg_;
   Predictor pred_;
-  trackers::TrackerSanitizer sanitizer_;
-  trackers::Resampler resampler_;
   features::n3p::N3PCalibration calib_;
   pose::JointMap map_;
-  pose::BodyPose pose_, last_pose_;
-  pose::WorldPose world_, last_world_;
   FootPin lock_[2];
   features::n3p::TrackerSet trackers_{};
   std::array<bool, 3> present_{};
   int arm_[2][3] = {}, leg_[2][3] = {};
   double reach_[2] = {};
-  long long frames_ = 0;
-  bool valid_output_ = false;
 };
 
 }  // namespace sparsebody::avatar
