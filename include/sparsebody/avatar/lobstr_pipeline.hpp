@@ -224,17 +224,15 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     for (int side = 0; side < 2; ++side) {
       const int clav = arm_[side][3], up = arm_[side][0], lo = arm_[side][1], hand = arm_[side][2];
       const double sgn = side == 0 ? 1.0 : -1.0;
-      const Eigen::Vector3d a = out_.world().position[up], b = out_.world().position[lo], c = out_.world().position[hand];
+      const pose::WorldPose& w = out_.world();
       const Eigen::Vector3d pole = -up_body - 0.5 * fwd_body + 0.2 * sgn * left_body;
-      Eigen::Vector3d b2, c2;
-      pose::two_bone(a, b, c, cal_[1 + side].position, pole, b2, c2);
-      const Eigen::Quaterniond Wu = pose::aim(bone_local(up), Eigen::Vector3d::UnitY(), b2 - a, fwd_body);
-      const Eigen::Quaterniond Wl = pose::aim(bone_local(lo), Eigen::Vector3d::UnitY(), c2 - b2, fwd_body);
+      const auto ik = pose::limb_to(w.position[up], w.position[lo], w.position[hand], w.rotation[up], w.rotation[lo],
+                                    cal_[1 + side].position, pole,
+                                    pose::LimbRotation::aimed(bone_local(up), bone_local(lo), Eigen::Vector3d::UnitY(), fwd_body));
       const Eigen::Matrix3d Ht = cal_[1 + side].orientation.toRotationMatrix();
       const Eigen::Quaterniond Wd = pose::aim(bone_local(hand), Eigen::Vector3d::UnitY(), sgn * Ht.col(0), Ht.col(1));
-      out_.pose().local[up] = (out_.world().rotation[clav].conjugate() * Wu).normalized();
-      out_.pose().local[lo] = (Wu.conjugate() * Wl).normalized();
-      out_.pose().local[hand] = (Wl.conjugate() * Wd).normalized();
+      const int arm[3] = {up, lo, hand};
+      pose::set_limb_locals(out_.pose(), arm, &w.rotation[clav], ik.upper, ik.lower, Wd, true);
     }
   }
 
@@ -252,19 +250,13 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       if (!lock_[foot].update(contact(foot), out_.world().position[toe], hip, reach, cfg_.lock_max_drift, meta_.toe_height, target)) continue;
       // ankle target keeps the foot's world orientation: ankle = target - (toe - ankle)
       const Eigen::Vector3d ankle_t = target - (out_.world().position[toe] - out_.world().position[ft]);
-      const Eigen::Vector3d a = out_.world().position[ul], b = out_.world().position[ll], c = out_.world().position[ft];
+      const pose::WorldPose& w = out_.world();
+      const Eigen::Vector3d &a = w.position[ul], &b = w.position[ll], &c = w.position[ft];
       const Eigen::Vector3d fwd = cal_[3].orientation.toRotationMatrix().col(2);
+      // knee: in the leg's current bend plane, nudged forwards so a straight leg bends forwards
       const Eigen::Vector3d pole = (b - a) - (b - a).dot((c - a).normalized()) * (c - a).normalized() + 0.05 * fwd;
-      Eigen::Vector3d b2, c2;
-      pose::two_bone(a, b, c, ankle_t, pole, b2, c2);
-      const Eigen::Quaterniond Wu = pose::swing(b - a, b2 - a) * out_.world().rotation[ul];
-      const Eigen::Quaterniond Wl_tmp = pose::swing(b - a, b2 - a) * out_.world().rotation[ll];
-      const Eigen::Vector3d c_after = b2 + pose::swing(b - a, b2 - a) * (c - b);
-      const Eigen::Quaterniond Wl = pose::swing(c_after - b2, c2 - b2) * Wl_tmp;
-      const Eigen::Quaterniond Wf = out_.world().rotation[ft];
-      out_.pose().local[ul] = (out_.world().rotation[s.parents[ul]].conjugate() * Wu).normalized();
-      out_.pose().local[ll] = (Wu.conjugate() * Wl).normalized();
-      out_.pose().local[ft] = (Wl.conjugate() * Wf).normalized();
+      const auto ik = pose::limb_to(a, b, c, w.rotation[ul], w.rotation[ll], ankle_t, pole, pose::LimbRotation::sequential());
+      pose::set_limb_locals(out_.pose(), L, &w.rotation[s.parents[ul]], ik.upper, ik.lower, w.rotation[ft], true);
       changed = true;
     }
     if (changed) pose::forward_kinematics(s, out_.pose(), out_.world());

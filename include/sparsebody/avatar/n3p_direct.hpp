@@ -166,7 +166,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     if (cfg_.foot_ik) pin_feet();
     if (cfg_.hand_ik)
       for (int side = 0; side < 2; ++side)
-        if (present[1 + side]) limb_to(arm_[side], o[1 + side].p);
+        if (present[1 + side]) put_limb(arm_[side], o[1 + side].p);
     if (cfg_.foot_ik || cfg_.hand_ik) pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
     if (!out_.commit()) reset_state();  // never hand out a NaN: the last pose is kept; restart
   }
@@ -227,28 +227,22 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       Eigen::Vector3d target;
       if (lock_[side].update(contact(side), out_.world().position[l[2]], out_.world().position[l[0]], reach_[side], cfg_.foot_max_drift,
                              target)) {
-        limb_to(l, target);
+        put_limb(l, target);
         pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
       }
     }
   }
 
-  // Two-bone IK on the chain a -> b -> c (c's world rotation kept): c goes to `target`.
-  void limb_to(const int* j, const Eigen::Vector3d& target) noexcept {
-    const int a = j[0], b = j[1], c = j[2];
-    const Eigen::Vector3d pa = out_.world().position[a], pb = out_.world().position[b], pc = out_.world().position[c];
-    Eigen::Vector3d nb, nc;
-    pose::two_bone(pa, pb, pc, target, pb - pa, nb, nc);
-    const Eigen::Quaterniond s1 = pose::swing(pb - pa, nb - pa);
-    const Eigen::Quaterniond qa = (s1 * out_.world().rotation[a]).normalized();
-    const Eigen::Quaterniond qb = (pose::swing(s1 * (pc - pb), nc - nb) * s1 * out_.world().rotation[b]).normalized();
-    const Eigen::Quaterniond qc = out_.world().rotation[c];
-    const int pa_parent = pred_.skeleton().parents[a];
-    out_.pose().local[a] = pa_parent < 0 ? qa : Eigen::Quaterniond(out_.world().rotation[pa_parent].conjugate() * qa);
-    out_.pose().local[b] = qa.conjugate() * qb;
-    out_.pose().local[c] = qb.conjugate() * qc;
-    out_.world().rotation[a] = qa;
-    out_.world().rotation[b] = qb;
+  // Two-bone IK on the chain j[0] -> j[1] -> j[2] (pose::limb_to, bent in its current plane, the
+  // end's world rotation kept, world rotations renormalised): the end goes to `target`. The world
+  // pose is stale until the caller's forward kinematics.
+  void put_limb(const int* j, const Eigen::Vector3d& target) noexcept {
+    const pose::WorldPose& w = out_.world();
+    const Eigen::Vector3d &pa = w.position[j[0]], &pb = w.position[j[1]], &pc = w.position[j[2]];
+    const auto s = pose::limb_to(pa, pb, pc, w.rotation[j[0]], w.rotation[j[1]], target, pb - pa);
+    const int parent = pred_.skeleton().parents[j[0]];
+    pose::set_limb_locals(out_.pose(), j, parent < 0 ? nullptr : &w.rotation[parent], s.upper.normalized(),
+                          s.lower.normalized(), w.rotation[j[2]], false);
   }
 
   N3PConfig cfg_;
