@@ -102,3 +102,25 @@ TEST_CASE("limb_to: the end on the target, bones carried by their swings; the ro
   CHECK((Wp * p.local[1] * p.local[2]).angularDistance(comp.lower) < 1e-12);
   CHECK((Wp * p.local[1] * p.local[2] * p.local[3]).angularDistance(Wc) < 1e-12);
 }
+
+TEST_CASE("foot lock, direct-mode options: pinned at the joint's own height; Rearm orders the hold-off") {
+  Vector3d target;
+  const Vector3d hip(0, 0.9, 0);
+  pose::FootLock pin(8, pose::FootLock::Rearm::NextFrame);
+  REQUIRE(pin.update(true, Vector3d(0.1, 0.08, 0.2), hip, 1.0, 0.1, target));
+  CHECK(target == Vector3d(0.1, 0.08, 0.2));  // no height given: where the ankle is
+  for (int k = 1; k <= 8; ++k) REQUIRE(pin.update(false, Vector3d(0.3, 0.08, 0.2), hip, 1.0, 0.1, target));
+  CHECK(pin.state() == pose::FootLock::State::Free);  // 8-frame release
+  // A lock released for drift on a frame whose contact is already off: with SameFrame (LoBSTr)
+  // that off frame re-arms it, so the next contact locks again; with NextFrame (direct mode) the
+  // hold-off lasts until a later off frame.
+  for (auto rearm : {pose::FootLock::Rearm::SameFrame, pose::FootLock::Rearm::NextFrame}) {
+    pose::FootLock lock(8, rearm);
+    lock.update(true, Vector3d(0, 0.05, 0), hip, 1.0, 0.1, target);
+    lock.update(false, Vector3d(0.5, 0.05, 0), hip, 1.0, 0.1, target);  // off and 50 cm away
+    CHECK(lock.state() == pose::FootLock::State::Blending);
+    lock.update(true, Vector3d(0.5, 0.05, 0), hip, 1.0, 0.1, target);
+    CHECK(lock.state() == (rearm == pose::FootLock::Rearm::SameFrame ? pose::FootLock::State::Locked
+                                                                     : pose::FootLock::State::Blending));
+  }
+}

@@ -5,7 +5,8 @@
 //     -> N3PCalibration (device -> head / wrist joints, height scale, §7)
 //     -> N3PPredictor (Eq. (2): G_sig -> G_lo -> heading update -> G_up; o* for missing controllers)
 //     -> direct-mode IK (§7, "to enforce foot contacts and achieve accurate tracker positions"):
-//        feet in contact (c > threshold) are pinned (FootPin below) with two-bone leg IK;
+//        feet in contact (c > threshold) are pinned at the ankle (pose::FootLock, below) with
+//        two-bone leg IK;
 //        hands are put on the measured controllers with two-bone arm IK.
 //
 // Tracker modes, per frame from the validity flags (§8.2): 3-point; one controller (the missing one
@@ -36,6 +37,7 @@
 #include "sparsebody/avatar/pipeline_front_end.hpp"
 #include "sparsebody/features/n3p_calibration.hpp"
 #include "sparsebody/pose/body_pose.hpp"
+#include "sparsebody/pose/contact.hpp"
 #include "sparsebody/pose/ik.hpp"
 #include "sparsebody/pose/joint_map.hpp"
 #include "sparsebody/predict/n3p_predictor.hpp"
@@ -50,56 +52,6 @@ struct N3PConfig {
   double controller_max_distance = 1.5;  // from the headset (m, user's size); further: missing
   double foot_max_drift = 0.3;     // a pinned foot further than this from the prediction is released (m)
   trackers::SanitizerConfig sanitizer{};
-};
-
-// Direct-mode foot pinning, one foot (the ankle joint):
-//   contact on              -> the ankle position of that frame becomes the pin; leg IK holds it;
-//   contact off, or the pin out of the leg's reach from the hip, or further than `max_drift` from
-//   the predicted ankle     -> released over `blend` frames: the target moves from the pin to the
-//                              prediction with w_k = (1 - cos(pi k / n)) / 2; a pin released for
-//                              distance is not re-made until the contact flag goes off once.
-class FootPin {
- public:
-  enum class State { Free, Pinned, Releasing };
-  explicit FootPin(int blend = 8) : n_(blend) {}
-  void reset() noexcept { state_ = State::Free; hold_off_ = false; }
-  State state() const noexcept { return state_; }
-
-  // Returns true when IK must put the ankle at `target`.
-  bool update(bool contact, const Eigen::Vector3d& ankle, const Eigen::Vector3d& hip, double reach, double max_drift,
-              Eigen::Vector3d& target) noexcept {
-    if (!contact) hold_off_ = false;
-    if (state_ == State::Pinned && ((pin_ - hip).norm() > reach || (pin_ - ankle).norm() > max_drift)) {
-      hold_off_ = true;
-      contact = false;
-    }
-    contact = contact && !hold_off_;
-    if (contact && state_ != State::Pinned) {
-      pin_ = state_ == State::Releasing ? current_ : ankle;
-      state_ = State::Pinned;
-    } else if (!contact && state_ == State::Pinned) {
-      state_ = State::Releasing;
-      from_ = pin_;
-      k_ = 0;
-    }
-    if (state_ == State::Pinned) {
-      target = current_ = pin_;
-      return true;
-    }
-    if (state_ == State::Releasing) {
-      const double w = 0.5 - 0.5 * std::cos(M_PI * ++k_ / n_);
-      target = current_ = (1 - w) * from_ + w * ankle;
-      if (k_ >= n_) state_ = State::Free;
-      return true;
-    }
-    return false;
-  }
-
- private:
-  int n_, k_ = 0;
-  State state_ = State::Free;
-  bool hold_off_ = false;
-  Eigen::Vector3d pin_ = Eigen::Vector3d::Zero(), from_ = Eigen::Vector3d::Zero(), current_ = Eigen::Vector3d::Zero();
 };
 
 template <typename T = float, int HSig = 64, int HLo = 128, int HUp = 128, typename W = T>
@@ -186,7 +138,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   const Predictor& predictor() const noexcept { return pred_; }
   double contact_probability(int foot) const noexcept { return pred_.contact(foot); }
   bool contact(int foot) const noexcept { return contact_probability(foot) > cfg_.contact_threshold; }
-  bool foot_locked(int foot) const noexcept { return lock_[foot].state() != FootPin::State::Free; }
+  bool foot_locked(int foot) const noexcept { return lock_[foot].state() != pose::FootLock::State::Free; }
   // Controllers replaced by o* in the last frame (0: 3-point, 1: one controller, 2: HMD only).
   int predicted_controllers() const noexcept { return pred_.substituted(1) + pred_.substituted(2); }
   // The calibrated trackers of the last usable frame (joint poses, standard-skeleton scale) and which
@@ -220,7 +172,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     return true;
   }
 
-  // Feet in contact stay where contact began (FootPin), the leg bent to reach them.
+  // Feet in contact stay where contact began (lock_), the leg bent to reach them.
   void pin_feet() noexcept {
     for (int side = 0; side < 2; ++side) {
       const int* l = leg_[side];
@@ -249,7 +201,11 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   Predictor pred_;
   features::n3p::N3PCalibration calib_;
   pose::JointMap map_;
-  FootPin lock_[2];
+  // Direct-mode foot pinning (pose::FootLock): the ankle pinned where contact began (its own
+  // height), released over 8 frames; a pin released for distance needs the contact to go off on a
+  // later frame before it pins again.
+  pose::FootLock lock_[2] = {pose::FootLock(8, pose::FootLock::Rearm::NextFrame),
+                             pose::FootLock(8, pose::FootLock::Rearm::NextFrame)};
   features::n3p::TrackerSet trackers_{};
   std::array<bool, 3> present_{};
   int arm_[2][3] = {}, leg_[2][3] = {};
