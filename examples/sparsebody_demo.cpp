@@ -363,9 +363,8 @@ int run(const Options& o, Pipeline& pipe, Input& in, const std::string& credit) 
   return 0;
 }
 
-template <int Hidden, int Latent, typename W = float>
+template <class Pipeline>
 int run_lobstr(const Options& o, Input& in) {
-  using Pipeline = avatar::LoBSTrPipeline<float, Hidden, Latent, W>;
   const auto w = Pipeline::load(o.weights);
   avatar::LoBSTrConfig cfg;
   cfg.mode = o.mode;
@@ -384,9 +383,8 @@ int run_n3p_physics(const Options& o, Input& in) {
   return run(o, pipe, in, w.lo->info().credit);
 }
 
-template <typename W = float>
+template <class Pipeline>  // N3PDirect (the paper's sizes, the shipped weights) with its weight storage
 int run_n3p(const Options& o, Input& in) {
-  using Pipeline = avatar::N3PPipeline<float, 64, 128, 128, W>;  // the paper's sizes (the shipped weights)
   if (o.mode != avatar::RunMode::Streaming) std::printf("note    --mode window is LoBSTr-only; Neural3Points always streams\n");
   const auto w = Pipeline::load(o.weights);
   avatar::N3PConfig cfg;
@@ -426,9 +424,9 @@ int main(int argc, char** argv) {
         if (o.storage == "q8") return run_n3p_physics<nn::q8>(o, in);
         return run_n3p_physics(o, in);
       }
-      if (o.storage == "f16") return run_n3p<nn::f16>(o, in);
-      if (o.storage == "q8") return run_n3p<nn::q8>(o, in);
-      return run_n3p(o, in);
+      if (o.storage == "f16") return run_n3p<avatar::N3PDirectF16>(o, in);
+      if (o.storage == "q8") return run_n3p<avatar::N3PDirectQ8>(o, in);
+      return run_n3p<avatar::N3PDirect>(o, in);
     }
     if (o.weights.empty()) o.weights = SPARSEBODY_DEFAULT_WEIGHTS;
     std::ifstream probe(o.weights);
@@ -437,10 +435,14 @@ int main(int argc, char** argv) {
     const int hidden = doc.at("meta").value("hidden", 256), latent = doc.at("meta").value("latent", 128);
     const bool f16 = o.storage == "f16", q8 = o.storage == "q8";
     if (hidden == 256 && latent == 128)
-      return f16 ? run_lobstr<256, 128, nn::f16>(o, in) : q8 ? run_lobstr<256, 128, nn::q8>(o, in) : run_lobstr<256, 128>(o, in);
+      return f16  ? run_lobstr<avatar::LoBSTrCompactF16>(o, in)
+             : q8 ? run_lobstr<avatar::LoBSTrCompactQ8>(o, in)
+                  : run_lobstr<avatar::LoBSTrCompact>(o, in);
     if (hidden == 1024 && latent == 128)
-      return f16 ? run_lobstr<1024, 128, nn::f16>(o, in) : q8 ? run_lobstr<1024, 128, nn::q8>(o, in) : run_lobstr<1024, 128>(o, in);
-    if (hidden == 32 && latent == 16 && !f16 && !q8) return run_lobstr<32, 16>(o, in);
+      return f16  ? run_lobstr<avatar::LoBSTrPaperF16>(o, in)
+             : q8 ? run_lobstr<avatar::LoBSTrPaperQ8>(o, in)
+                  : run_lobstr<avatar::LoBSTrPaper>(o, in);
+    if (hidden == 32 && latent == 16 && !f16 && !q8) return run_lobstr<avatar::LoBSTrPipeline<float, 32, 16>>(o, in);  // test size
     std::fprintf(stderr, "%s: no build of this demo for H=%d latent=%d (compiled: 256/128 and 1024/128 in float/f16/q8, 32/16 in float)\n", o.weights.c_str(), hidden, latent);
     return 1;
   } catch (const LoadError& e) {

@@ -22,6 +22,8 @@
 #include "sparsebody/features/calibration.hpp"
 #include "sparsebody/features/lobstr_features.hpp"
 #include "sparsebody/networks/lobstr_net.hpp"
+#include "sparsebody/nn/half.hpp"
+#include "sparsebody/nn/int8.hpp"
 #include "sparsebody/nn/network.hpp"
 #include "sparsebody/pose/body_pose.hpp"
 #include "sparsebody/pose/contact.hpp"
@@ -54,6 +56,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   using Net = networks::LoBSTrNet<T, Hidden, Latent, features::kLoBSTrFeatureCount, W>;
   using Weights = nn::NetworkWeights<Net>;
   static constexpr int kFeatures = features::kLoBSTrFeatureCount;
+  static constexpr int kHidden = Hidden, kLatent = Latent;
 
   static std::shared_ptr<const Weights> load(const std::string& path) { return Weights::load(path, networks::kLoBSTrKind); }
 
@@ -280,5 +283,15 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   int chest_ = 0;
   Eigen::Vector3d lateral_local_ = Eigen::Vector3d::UnitZ();
 };
+
+// The shipped configurations, by name: compact (H = 256, latent 128: examples/weights/
+// lobstr_compact.weights.json) and the paper's size (H = 1024, latent 128), each with float, f16
+// (half the weight bytes) or int8 (a quarter) weight storage.
+using LoBSTrCompact = LoBSTrPipeline<float, 256, 128>;
+using LoBSTrCompactF16 = LoBSTrPipeline<float, 256, 128, nn::f16>;
+using LoBSTrCompactQ8 = LoBSTrPipeline<float, 256, 128, nn::q8>;
+using LoBSTrPaper = LoBSTrPipeline<float, 1024, 128>;
+using LoBSTrPaperF16 = LoBSTrPipeline<float, 1024, 128, nn::f16>;
+using LoBSTrPaperQ8 = LoBSTrPipeline<float, 1024, 128, nn::q8>;
 
 }  // namespace sparsebody::avatar

@@ -24,9 +24,9 @@
 // The output pose is always finite: a frame that would not be keeps the last pose.
 // Per frame: no allocation, no exception, no lock. Everything is sized at construction.
 //
-// Use (the LoBSTr pipeline's shape):
-//   auto w = avatar::N3PPipeline<>::load("examples/weights/n3p");   // n3p_{signal,lower,upper}.json
-//   avatar::N3PPipeline<> p(w);
+// Use (the LoBSTr pipeline's shape; N3PDirect is the shipped weights' configuration):
+//   auto w = avatar::N3PDirect::load("examples/weights/n3p");   // n3p_{signal,lower,upper}.json
+//   avatar::N3PDirect p(w);
 //   p.calibrate(tpose_frame);                  // optional, §7
 //   for (frame : frames) { p.push(frame); if (p.has_output()) use(p.pose(), p.world(), p.user_scale()); }
 #pragma once
@@ -36,6 +36,8 @@
 
 #include "sparsebody/avatar/pipeline_front_end.hpp"
 #include "sparsebody/features/n3p_calibration.hpp"
+#include "sparsebody/nn/half.hpp"
+#include "sparsebody/nn/int8.hpp"
 #include "sparsebody/pose/body_pose.hpp"
 #include "sparsebody/pose/contact.hpp"
 #include "sparsebody/pose/ik.hpp"
@@ -61,6 +63,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
  public:
   using Predictor = predict::N3PPredictor<T, HSig, HLo, HUp, W>;
   using Weights = typename Predictor::Weights;
+  static constexpr int kHiddenSignal = HSig, kHiddenLower = HLo, kHiddenUpper = HUp;
 
   // prefix ("…/n3p") or any of the three files; throws LoadError.
   static Weights load(const std::string& path) { return Predictor::load(path); }
@@ -211,5 +214,11 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   int arm_[2][3] = {}, leg_[2][3] = {};
   double reach_[2] = {};
 };
+
+// The shipped configuration, by name: the paper's sizes (G_sig / G_lo / G_up hidden 64 / 128 / 128:
+// examples/weights/n3p_*.json) with float, f16 (half the weight bytes) or int8 (a quarter) storage.
+using N3PDirect = N3PPipeline<float, 64, 128, 128>;
+using N3PDirectF16 = N3PPipeline<float, 64, 128, 128, nn::f16>;
+using N3PDirectQ8 = N3PPipeline<float, 64, 128, 128, nn::q8>;
 
 }  // namespace sparsebody::avatar
