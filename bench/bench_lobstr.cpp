@@ -34,27 +34,24 @@ std::vector<trackers::TrackerFrame> clip_frames() {
   return out;
 }
 
-template <int H, typename Wt = float>
-using Pipe = avatar::LoBSTrPipeline<float, H, 128, Wt>;
-
-template <int H, typename Wt = float>
-std::shared_ptr<const typename Pipe<H, Wt>::Weights> weights() {
-  using W = typename Pipe<H, Wt>::Weights;
-  if constexpr (H == 256) {
-    return Pipe<H, Wt>::load(SPARSEBODY_LOBSTR_WEIGHTS);
+// P: a shipped configuration (avatar::LoBSTrCompact, LoBSTrPaper, their F16 / Q8 storage).
+template <class P>
+std::shared_ptr<const typename P::Weights> weights() {
+  if constexpr (P::kHidden == 256) {
+    return P::load(SPARSEBODY_LOBSTR_WEIGHTS);
   } else {  // paper size: random tensors, the shipped file's metadata and input normalisation
     io::WeightsDocument doc = io::read_weights_file(SPARSEBODY_LOBSTR_WEIGHTS);
-    doc.tensors = sparsebody_test::random_lobstr_table(H, 128, 11);
-    return W::from_document(std::move(doc), networks::kLoBSTrKind);
+    doc.tensors = sparsebody_test::random_lobstr_table(P::kHidden, P::kLatent, 11);
+    return P::Weights::from_document(std::move(doc), networks::kLoBSTrKind);
   }
 }
 
-template <int H, typename Wt = float>
+template <class P>
 void BM_Pipeline(benchmark::State& st) {
   const bool window = st.range(0) != 0;
   avatar::LoBSTrConfig cfg;
   cfg.mode = window ? avatar::RunMode::Window : avatar::RunMode::Streaming;
-  Pipe<H, Wt> p(weights<H, Wt>(), cfg);
+  P p(weights<P>(), cfg);
   const auto frames = clip_frames();
   std::size_t i = 0;
   double t = 0;
@@ -74,15 +71,15 @@ void BM_Pipeline(benchmark::State& st) {
     benchmark::ClobberMemory();
   }
   st.counters["steps_per_frame"] = double(steps) / double(st.iterations());
-  st.SetLabel(std::string(H == 256 ? "compact H=256" : "paper H=1024") + (window ? ", window 30" : ", streaming"));
+  st.SetLabel(std::string(P::kHidden == 256 ? "compact H=256" : "paper H=1024") + (window ? ", window 30" : ", streaming"));
 }
 
 // The network step alone (same weights, the pipeline's features as input): the pipeline's own cost
-// is the difference, measured in the same run.
-template <int H, typename Wt = float>
+// is the difference, measured in the same run. Features from the float pipeline of the same size.
+template <class P, class FloatP>
 void BM_NetworkOnly(benchmark::State& st) {
-  Pipe<H> p(weights<H>());
-  nn::Network<typename Pipe<H, Wt>::Net> net(weights<H, Wt>());
+  FloatP p(weights<FloatP>());
+  nn::Network<typename P::Net> net(weights<P>());
   const auto frames = clip_frames();
   std::vector<std::array<float, 37>> xs;
   for (std::size_t i = 0; i < frames.size(); ++i) {
@@ -100,22 +97,28 @@ void BM_NetworkOnly(benchmark::State& st) {
     benchmark::DoNotOptimize(y);
     benchmark::ClobberMemory();
   }
-  st.SetLabel(H == 256 ? "network step only, H=256" : "network step only, H=1024");
+  st.SetLabel(P::kHidden == 256 ? "network step only, H=256" : "network step only, H=1024");
 }
 
-BENCHMARK_TEMPLATE(BM_NetworkOnly, 256)->Name("lobstr/compact/network_only")->Unit(benchmark::kMicrosecond);
-BENCHMARK_TEMPLATE(BM_NetworkOnly, 1024)->Name("lobstr/paper/network_only")->Unit(benchmark::kMicrosecond);
-BENCHMARK_TEMPLATE(BM_Pipeline, 256)->Name("lobstr/compact/streaming")->Arg(0)->Unit(benchmark::kMicrosecond);
-BENCHMARK_TEMPLATE(BM_Pipeline, 256)->Name("lobstr/compact/window")->Arg(1)->Unit(benchmark::kMicrosecond);
-BENCHMARK_TEMPLATE(BM_Pipeline, 1024)->Name("lobstr/paper/streaming")->Arg(0)->Unit(benchmark::kMicrosecond);
-BENCHMARK_TEMPLATE(BM_Pipeline, 1024)->Name("lobstr/paper/window")->Arg(1)->Unit(benchmark::kMicrosecond)->Iterations(200);
+using avatar::LoBSTrCompact;
+using avatar::LoBSTrCompactF16;
+using avatar::LoBSTrCompactQ8;
+using avatar::LoBSTrPaper;
+using avatar::LoBSTrPaperF16;
+using avatar::LoBSTrPaperQ8;
+BENCHMARK_TEMPLATE(BM_NetworkOnly, LoBSTrCompact, LoBSTrCompact)->Name("lobstr/compact/network_only")->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_NetworkOnly, LoBSTrPaper, LoBSTrPaper)->Name("lobstr/paper/network_only")->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Pipeline, LoBSTrCompact)->Name("lobstr/compact/streaming")->Arg(0)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Pipeline, LoBSTrCompact)->Name("lobstr/compact/window")->Arg(1)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Pipeline, LoBSTrPaper)->Name("lobstr/paper/streaming")->Arg(0)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Pipeline, LoBSTrPaper)->Name("lobstr/paper/window")->Arg(1)->Unit(benchmark::kMicrosecond)->Iterations(200);
 // Smaller weight storage (nn/half.hpp, nn/int8.hpp): same pipeline, f16 or int8 network weights.
-BENCHMARK_TEMPLATE(BM_NetworkOnly, 256, nn::q8)->Name("lobstr/compact/network_only_q8")->Unit(benchmark::kMicrosecond);
-BENCHMARK_TEMPLATE(BM_NetworkOnly, 1024, nn::q8)->Name("lobstr/paper/network_only_q8")->Unit(benchmark::kMicrosecond);
-BENCHMARK_TEMPLATE(BM_Pipeline, 256, nn::f16)->Name("lobstr/compact/streaming_f16")->Arg(0)->Unit(benchmark::kMicrosecond);
-BENCHMARK_TEMPLATE(BM_Pipeline, 256, nn::q8)->Name("lobstr/compact/streaming_q8")->Arg(0)->Unit(benchmark::kMicrosecond);
-BENCHMARK_TEMPLATE(BM_Pipeline, 1024, nn::f16)->Name("lobstr/paper/streaming_f16")->Arg(0)->Unit(benchmark::kMicrosecond);
-BENCHMARK_TEMPLATE(BM_Pipeline, 1024, nn::q8)->Name("lobstr/paper/streaming_q8")->Arg(0)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_NetworkOnly, LoBSTrCompactQ8, LoBSTrCompact)->Name("lobstr/compact/network_only_q8")->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_NetworkOnly, LoBSTrPaperQ8, LoBSTrPaper)->Name("lobstr/paper/network_only_q8")->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Pipeline, LoBSTrCompactF16)->Name("lobstr/compact/streaming_f16")->Arg(0)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Pipeline, LoBSTrCompactQ8)->Name("lobstr/compact/streaming_q8")->Arg(0)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Pipeline, LoBSTrPaperF16)->Name("lobstr/paper/streaming_f16")->Arg(0)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Pipeline, LoBSTrPaperQ8)->Name("lobstr/paper/streaming_q8")->Arg(0)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

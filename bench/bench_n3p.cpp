@@ -19,7 +19,7 @@
 using namespace sparsebody;
 
 namespace {
-using Pipeline = avatar::N3PPipeline<float, 64, 128, 128>;
+using Pipeline = avatar::N3PDirect;
 
 template <class P = Pipeline>
 const typename P::Weights* weights() {
@@ -73,12 +73,8 @@ void predictor(benchmark::State& state, bool hmd_only) {
 }
 void BM_N3PPredictorStep(benchmark::State& s) { predictor<Pipeline>(s, false); }
 void BM_N3PPredictorHmdOnly(benchmark::State& s) { predictor<Pipeline>(s, true); }
-void BM_N3PPredictorStepF16(benchmark::State& s) {
-  predictor<avatar::N3PPipeline<float, 64, 128, 128, nn::f16>>(s, false);
-}
-void BM_N3PPredictorStepQ8(benchmark::State& s) {
-  predictor<avatar::N3PPipeline<float, 64, 128, 128, nn::q8>>(s, false);
-}
+void BM_N3PPredictorStepF16(benchmark::State& s) { predictor<avatar::N3PDirectF16>(s, false); }
+void BM_N3PPredictorStepQ8(benchmark::State& s) { predictor<avatar::N3PDirectQ8>(s, false); }
 
 template <class Net, class WPtr>
 void net_step(benchmark::State& state, const WPtr& w) {
@@ -116,8 +112,8 @@ void pipeline_frame(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 void BM_N3PPipelineFrame(benchmark::State& s) { pipeline_frame<Pipeline>(s); }
-void BM_N3PPipelineFrameF16(benchmark::State& s) { pipeline_frame<avatar::N3PPipeline<float, 64, 128, 128, nn::f16>>(s); }
-void BM_N3PPipelineFrameQ8(benchmark::State& s) { pipeline_frame<avatar::N3PPipeline<float, 64, 128, 128, nn::q8>>(s); }
+void BM_N3PPipelineFrameF16(benchmark::State& s) { pipeline_frame<avatar::N3PDirectF16>(s); }
+void BM_N3PPipelineFrameQ8(benchmark::State& s) { pipeline_frame<avatar::N3PDirectQ8>(s); }
 }  // namespace
 
 BENCHMARK(BM_N3PPredictorStep);

@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
   }
   std::ifstream in(file);
   const auto d = nlohmann::json::parse(in);
-  if (storage == "f16") return evaluate<avatar::N3PPipeline<float, 64, 128, 128, nn::f16>>(d, prefix, "f16");
-  if (storage == "q8") return evaluate<avatar::N3PPipeline<float, 64, 128, 128, nn::q8>>(d, prefix, "q8");
-  return evaluate<avatar::N3PPipeline<float, 64, 128, 128>>(d, prefix, "float");
+  if (storage == "f16") return evaluate<avatar::N3PDirectF16>(d, prefix, "f16");
+  if (storage == "q8") return evaluate<avatar::N3PDirectQ8>(d, prefix, "q8");
+  return evaluate<avatar::N3PDirect>(d, prefix, "float");
 }

@@ -1,5 +1,6 @@
-// Zero heap allocations per frame: the pipeline (resampler, sanitizer, calibration, predictor,
-// direct-mode IK) over clean frames, HMD-only frames and bad input.
+// Zero heap allocations per frame: the pipeline (the shared front end's resampler, sanitizer and
+// output pose, calibration, predictor, direct-mode IK) over clean frames, HMD-only frames and
+// bad input.
 #include <doctest/doctest.h>
 
 #include "n3p/common.hpp"
@@ -18,12 +19,17 @@ TEST_CASE("n3p pipeline: no allocation per frame") {
   frames[20].pose[0].position.x = std::numeric_limits<float>::quiet_NaN();
   frames[21].valid[0] = false;
   for (int t = 0; t < 3; ++t) p.push(frames[t]);  // warm-up
+  features::n3p::N3PCalibration nan_scale;
+  nan_scale.base.scale = std::numeric_limits<double>::quiet_NaN();
   long long n = 0;
   {
     sparsebody_test::AllocationCounter counter;
     for (std::size_t t = 3; t < frames.size(); ++t) {
       trackers::TrackerFrame f = frames[t];
       f.time += 0.004;  // off the 30 Hz grid: the resampler interpolates
+      // frames 30-31 under a NaN calibration scale: the predictor rejects them, the last pose stays
+      if (t == 30) p.set_calibration(nan_scale);
+      if (t == 32) p.set_calibration(features::n3p::N3PCalibration{});
       p.push(f);
     }
     n = counter.count();

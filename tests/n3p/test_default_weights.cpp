@@ -11,7 +11,7 @@
 using namespace sparsebody;
 
 namespace {
-using Paper = avatar::N3PPipeline<float, 64, 128, 128>;
+using Paper = avatar::N3PDirect;
 std::string prefix() { return std::string(SPARSEBODY_SOURCE_DIR) + "/examples/weights/n3p"; }
 }  // namespace
 

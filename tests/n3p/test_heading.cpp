@@ -30,6 +30,27 @@ TEST_CASE("heading frame: R_y(theta) maps +Z to (sin theta, 0, cos theta); from(
   CHECK(std::abs(h.rotation().determinant() - 1) < 1e-12);
 }
 
+TEST_CASE("one heading: heading_angle gives HeadingFrame::from's theta and yaw_frame's rotation") {
+  using namespace sparsebody::features;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n(0, 1);
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector3d f(n(rng), n(rng), n(rng));
+    const double t = heading_angle(f);
+    CHECK(t == std::atan2(f.x(), f.z()));
+    CHECK(HeadingFrame::from(Eigen::Vector3d::Zero(), f).theta == t);
+    CHECK(yaw_frame(f, Eigen::Matrix3d::Zero()) == HeadingFrame{0, 0, t}.rotation());
+    // the normalised ground projection (the Python twin's yaw_frame) to rounding
+    const Eigen::Vector3d z = Eigen::Vector3d(f.x(), 0, f.z()).normalized();
+    CHECK((yaw_frame(f, Eigen::Matrix3d::Zero()).col(2) - z).norm() < 1e-15);
+    // float callers keep float arithmetic
+    const Eigen::Vector3f ff = f.cast<float>();
+    CHECK(heading_angle(ff, 1e-6f) == std::atan2(ff.x(), ff.z()));
+  }
+  CHECK(heading_angle(Eigen::Vector3d(0, 1, 0)) == 0.0);  // vertical: no heading
+  CHECK(yaw_frame(Eigen::Vector3d(1e-4, 1, 0), Eigen::Matrix3d::Zero()).isZero());  // fallback
+}
+
 TEST_CASE("heading frame: group laws") {
   std::mt19937 rng(3);
   for (int i = 0; i < 200; ++i) {

@@ -68,3 +68,59 @@ TEST_CASE("aim maps the primary axis exactly and the secondary as close as possi
   const Eigen::Quaterniond r = pose::aim(Vector3d::UnitX(), Vector3d::UnitY(), Vector3d(1, 0, 0), Vector3d(1, 0, 0));  // degenerate
   CHECK(r.coeffs().allFinite());
 }
+
+TEST_CASE("limb_to: the end on the target, bones carried by their swings; the rotation rules agree") {
+  const Vector3d a(0, 1, 0), b(0.02, 0.55, 0.05), c(0, 0.1, 0), target(0.15, 0.35, 0.25);
+  const Eigen::Quaterniond Wa(Eigen::AngleAxisd(0.4, Vector3d(1, 2, 0).normalized()));
+  const Eigen::Quaterniond Wb(Eigen::AngleAxisd(-0.7, Vector3d(0, 1, 3).normalized()));
+  const auto comp = pose::limb_to(a, b, c, Wa, Wb, target, b - a);
+  const auto seq = pose::limb_to(a, b, c, Wa, Wb, target, b - a, pose::LimbRotation::sequential());
+  CHECK((comp.c - target).norm() < 1e-9);
+  CHECK(comp.b == seq.b);
+  CHECK(comp.c == seq.c);
+  // each bone's direction in its joint's frame is unchanged: W' W^-1 maps the old bone onto the new
+  CHECK(((comp.upper * Wa.conjugate()) * (b - a) - (comp.b - a)).norm() < 1e-9);
+  CHECK(((comp.lower * Wb.conjugate()) * (c - b) - (comp.c - comp.b)).norm() < 1e-9);
+  CHECK(comp.upper.angularDistance(seq.upper) < 1e-12);
+  CHECK(comp.lower.angularDistance(seq.lower) < 1e-12);
+  // the same solve on rotation matrices (the control predictor's 6D rotations)
+  const auto mat = pose::limb_to(a, b, c, Eigen::Matrix3d(Wa.toRotationMatrix()), Eigen::Matrix3d(Wb.toRotationMatrix()), target, b - a);
+  CHECK((mat.upper - comp.upper.toRotationMatrix()).norm() < 1e-12);
+  CHECK((mat.lower - comp.lower.toRotationMatrix()).norm() < 1e-12);
+  // aimed bones: each bone axis along its new direction, the side axis towards the twist
+  const auto aimed = pose::limb_to(a, b, c, Wa, Wb, target, Vector3d(0, 0, 1),
+                                   pose::LimbRotation::aimed(Vector3d::UnitX(), Vector3d::UnitX(), Vector3d::UnitY(), Vector3d::UnitZ()));
+  CHECK((aimed.upper * Vector3d::UnitX() - (aimed.b - a).normalized()).norm() < 1e-12);
+  CHECK((aimed.lower * Vector3d::UnitX() - (aimed.c - aimed.b).normalized()).norm() < 1e-12);
+  // locals: L_a = W_p^-1 W_a', L_b = W_a'^-1 W_b', L_c = W_b'^-1 W_c
+  pose::BodyPose p;
+  p.resize(4);
+  const int j[3] = {1, 2, 3};
+  const Eigen::Quaterniond Wp(Eigen::AngleAxisd(0.2, Vector3d::UnitY())), Wc(Eigen::AngleAxisd(1.0, Vector3d::UnitX()));
+  pose::set_limb_locals(p, j, &Wp, comp.upper, comp.lower, Wc, true);
+  CHECK((Wp * p.local[1]).angularDistance(comp.upper) < 1e-12);
+  CHECK((Wp * p.local[1] * p.local[2]).angularDistance(comp.lower) < 1e-12);
+  CHECK((Wp * p.local[1] * p.local[2] * p.local[3]).angularDistance(Wc) < 1e-12);
+}
+
+TEST_CASE("foot lock, direct-mode options: pinned at the joint's own height; Rearm orders the hold-off") {
+  Vector3d target;
+  const Vector3d hip(0, 0.9, 0);
+  pose::FootLock pin(8, pose::FootLock::Rearm::NextFrame);
+  REQUIRE(pin.update(true, Vector3d(0.1, 0.08, 0.2), hip, 1.0, 0.1, target));
+  CHECK(target == Vector3d(0.1, 0.08, 0.2));  // no height given: where the ankle is
+  for (int k = 1; k <= 8; ++k) REQUIRE(pin.update(false, Vector3d(0.3, 0.08, 0.2), hip, 1.0, 0.1, target));
+  CHECK(pin.state() == pose::FootLock::State::Free);  // 8-frame release
+  // A lock released for drift on a frame whose contact is already off: with SameFrame (LoBSTr)
+  // that off frame re-arms it, so the next contact locks again; with NextFrame (direct mode) the
+  // hold-off lasts until a later off frame.
+  for (auto rearm : {pose::FootLock::Rearm::SameFrame, pose::FootLock::Rearm::NextFrame}) {
+    pose::FootLock lock(8, rearm);
+    lock.update(true, Vector3d(0, 0.05, 0), hip, 1.0, 0.1, target);
+    lock.update(false, Vector3d(0.5, 0.05, 0), hip, 1.0, 0.1, target);  // off and 50 cm away
+    CHECK(lock.state() == pose::FootLock::State::Blending);
+    lock.update(true, Vector3d(0.5, 0.05, 0), hip, 1.0, 0.1, target);
+    CHECK(lock.state() == (rearm == pose::FootLock::Rearm::SameFrame ? pose::FootLock::State::Locked
+                                                                     : pose::FootLock::State::Blending));
+  }
+}

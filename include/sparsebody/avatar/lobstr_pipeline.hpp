@@ -18,9 +18,12 @@
 #include <string>
 #include <vector>
 
+#include "sparsebody/avatar/pipeline_front_end.hpp"
 #include "sparsebody/features/calibration.hpp"
 #include "sparsebody/features/lobstr_features.hpp"
 #include "sparsebody/networks/lobstr_net.hpp"
+#include "sparsebody/nn/half.hpp"
+#include "sparsebody/nn/int8.hpp"
 #include "sparsebody/nn/network.hpp"
 #include "sparsebody/pose/body_pose.hpp"
 #include "sparsebody/pose/contact.hpp"
@@ -28,8 +31,6 @@
 #include "sparsebody/pose/joint_map.hpp"
 #include "sparsebody/pose/rotation6d.hpp"
 #include "sparsebody/predict/lobstr_meta.hpp"
-#include "sparsebody/trackers/resampler.hpp"
-#include "sparsebody/trackers/sanitizer.hpp"
 
 namespace sparsebody::avatar {
 
@@ -48,27 +49,26 @@ struct LoBSTrConfig {
 // W: the network's stored weight type: T, nn::f16 (half the bytes) or nn::q8 (int8, a quarter;
 // see nn/int8.hpp and the README for what each costs in accuracy).
 template <typename T = float, int Hidden = 256, int Latent = 128, typename W = T>
-class LoBSTrPipeline {
+class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent, W>> {
+  using Base = PipelineFrontEnd<LoBSTrPipeline>;
+
  public:
   using Net = networks::LoBSTrNet<T, Hidden, Latent, features::kLoBSTrFeatureCount, W>;
   using Weights = nn::NetworkWeights<Net>;
   static constexpr int kFeatures = features::kLoBSTrFeatureCount;
+  static constexpr int kHidden = Hidden, kLatent = Latent;
 
   static std::shared_ptr<const Weights> load(const std::string& path) { return Weights::load(path, networks::kLoBSTrKind); }
 
   explicit LoBSTrPipeline(std::shared_ptr<const Weights> w, LoBSTrConfig cfg = {})
-      : cfg_(cfg), meta_(predict::LoBSTrMeta::from(w->info())), net_(w), sanitizer_(cfg.sanitizer),
-        resampler_(meta_.frame_rate) {
+      : cfg_(cfg), meta_(predict::LoBSTrMeta::from(w->info())), net_(w) {
     const pose::Skeleton& s = meta_.skeleton;
     map_ = pose::JointMap::from_names(s, w->info().source);
     F_hips_T_ = pose::hips_tracker_frame(s, map_).transpose();
-    pose_.resize(s.size());
-    world_.resize(s.size());
+    this->start_front_end(meta_.frame_rate, cfg.sanitizer, s.size());
     window_ = cfg_.window > 0 ? cfg_.window : static_cast<int>(meta_.frame_rate + 0.5);
     if (cfg_.mode == RunMode::Window) ring_.assign(static_cast<std::size_t>(window_) * kFeatures, T(0));
     find_upper_body();
-    // the contact head's classes per foot: [no contact, contact]
-    for (int j = 0; j < s.size(); ++j) pose_.local[j] = Eigen::Quaterniond::Identity();
     reset();
   }
 
@@ -81,43 +81,35 @@ class LoBSTrPipeline {
   }
 
   // --- running ------------------------------------------------------------------------------
-  // Feeds one input frame at any rate; runs one model step per model tick it completes.
-  // Returns the number of steps run (0 when the frame falls between ticks).
-  int push(const trackers::TrackerFrame& f) noexcept {
-    return resampler_.push(f, [this](const trackers::TrackerFrame& tick, bool gap) { step(tick, gap); });
-  }
-
+  // push(frame) (any rate, PipelineFrontEnd) runs step once per model tick.
   // One model frame (the caller does the resampling). `restart`: state reset before this frame.
   void step(const trackers::TrackerFrame& f, bool restart = false) noexcept {
-    const trackers::SanitizedFrame& s = sanitizer_.process(f, 1.0 / meta_.frame_rate);
+    const trackers::SanitizedFrame& s = stream_.sanitize(f);
     if (restart || s.reset) reset_state();
     ++frames_;
-    if (!s.usable) { valid_output_ = false; return; }
+    if (!s.usable) { out_.invalidate(); return; }
     calib_.apply(s.pose, cal_);
     feat_.compute(cal_, x_);
     const T* y = run_network();
     for (int i = 0; i < Net::out_size; ++i) y_[i] = y[i];
     decode_lower_body();
     if (cfg_.upper_body_ik) solve_upper_body();
-    pose::forward_kinematics(meta_.skeleton, pose_, world_);
+    pose::forward_kinematics(meta_.skeleton, out_.pose(), out_.world());
     contacts_and_legs();
-    valid_output_ = true;
+    // The last-good guard, new with the shared front end (LoBSTr had none): a frame that would not
+    // be finite keeps the last pose and restarts the GRU (a NaN would poison its state), as direct
+    // mode does. A run without such a frame is unchanged.
+    if (!out_.commit()) reset_state();
   }
 
   void reset() noexcept {
     reset_state();
-    sanitizer_.reset();
-    resampler_.reset();
-    frames_ = 0;
-    valid_output_ = false;
+    this->reset_front_end();
   }
 
   // --- results ------------------------------------------------------------------------------
-  // The pose on the standard skeleton in its scale (metres); multiply positions and offsets by
-  // user_scale() for the user's size. Valid when has_output().
-  const pose::BodyPose& pose() const noexcept { return pose_; }
-  const pose::WorldPose& world() const noexcept { return world_; }
-  bool has_output() const noexcept { return valid_output_; }
+  // pose(), world(), has_output(), frames() (PipelineFrontEnd): the pose on the standard skeleton
+  // in its scale (metres); multiply positions and offsets by user_scale() for the user's size.
   double user_scale() const noexcept { return 1.0 / calib_.scale; }
   const pose::Skeleton& skeleton() const noexcept { return meta_.skeleton; }
   const pose::JointMap& joint_map() const noexcept { return map_; }
@@ -127,11 +119,14 @@ class LoBSTrPipeline {
   double contact_probability(int foot) const noexcept { return y_[48 + 2 * foot + 1]; }
   bool contact(int foot) const noexcept { return contact_probability(foot) > cfg_.contact_threshold; }
   bool foot_locked(int foot) const noexcept { return lock_[foot].state() != pose::FootLock::State::Free; }
-  long long frames() const noexcept { return frames_; }
   int window() const noexcept { return window_; }
   RunMode mode() const noexcept { return cfg_.mode; }
 
  private:
+  using Base::frames_;
+  using Base::out_;
+  using Base::stream_;
+
   void reset_state() noexcept {
     net_.reset();
     feat_.reset();
@@ -158,9 +153,9 @@ class LoBSTrPipeline {
   // from the network's 6D output.
   void decode_lower_body() noexcept {
     const trackers::PoseD& pel = cal_[3];
-    pose_.root_position = pel.position;
-    pose_.local[0] = Eigen::Quaterniond(pel.orientation.toRotationMatrix() * F_hips_T_).normalized();
-    for (int i = 0; i < 8; ++i) pose_.local[meta_.lower[i]] = Eigen::Quaterniond(pose::from6d(y_ + 6 * i));
+    out_.pose().root_position = pel.position;
+    out_.pose().local[0] = Eigen::Quaterniond(pel.orientation.toRotationMatrix() * F_hips_T_).normalized();
+    for (int i = 0; i < 8; ++i) out_.pose().local[meta_.lower[i]] = Eigen::Quaterniond(pose::from6d(y_ + 6 * i));
   }
 
   void find_upper_body() {
@@ -198,11 +193,11 @@ class LoBSTrPipeline {
   void solve_upper_body() noexcept {
     const pose::Skeleton& s = meta_.skeleton;
     const Eigen::Matrix3d H = cal_[0].orientation.toRotationMatrix();
-    const Eigen::Matrix3d Wh = pose_.local[0].toRotationMatrix();
+    const Eigen::Matrix3d Wh = out_.pose().local[0].toRotationMatrix();
     const Eigen::Vector3d left_body = cal_[3].orientation.toRotationMatrix().col(0);
     const Eigen::Vector3d up_body = cal_[3].orientation.toRotationMatrix().col(1);
     const int base = spine_rev_[spine_n_ - 1];
-    const Eigen::Vector3d base_pos = pose_.root_position + Wh * s.offsets[base];
+    const Eigen::Vector3d base_pos = out_.pose().root_position + Wh * s.offsets[base];
     Eigen::Vector3d dir = cal_[0].position - base_pos;
     if (dir.norm() < 1e-6) dir = up_body;
     dir.normalize();
@@ -216,33 +211,31 @@ class LoBSTrPipeline {
       } else {
         w = pose::aim(bone_local(j), lateral_local_, dir, left_body);
       }
-      pose_.local[j] = (parent_w.conjugate() * w).normalized();
+      out_.pose().local[j] = (parent_w.conjugate() * w).normalized();
       parent_w = w;
     }
-    pose::forward_kinematics(s, pose_, world_);
+    pose::forward_kinematics(s, out_.pose(), out_.world());
     const Eigen::Vector3d fwd_body = cal_[3].orientation.toRotationMatrix().col(2);
     for (int side = 0; side < 2; ++side) {  // clavicles outwards (independent of each other)
       const int clav = arm_[side][3];
       if (clav == chest_) continue;
       const double sgn = side == 0 ? 1.0 : -1.0;
       const Eigen::Quaterniond w = pose::aim(bone_local(clav), Eigen::Vector3d::UnitY(), sgn * left_body, fwd_body);
-      pose_.local[clav] = (world_.rotation[s.parents[clav]].conjugate() * w).normalized();
+      out_.pose().local[clav] = (out_.world().rotation[s.parents[clav]].conjugate() * w).normalized();
     }
-    pose::forward_kinematics(s, pose_, world_);
+    pose::forward_kinematics(s, out_.pose(), out_.world());
     for (int side = 0; side < 2; ++side) {
       const int clav = arm_[side][3], up = arm_[side][0], lo = arm_[side][1], hand = arm_[side][2];
       const double sgn = side == 0 ? 1.0 : -1.0;
-      const Eigen::Vector3d a = world_.position[up], b = world_.position[lo], c = world_.position[hand];
+      const pose::WorldPose& w = out_.world();
       const Eigen::Vector3d pole = -up_body - 0.5 * fwd_body + 0.2 * sgn * left_body;
-      Eigen::Vector3d b2, c2;
-      pose::two_bone(a, b, c, cal_[1 + side].position, pole, b2, c2);
-      const Eigen::Quaterniond Wu = pose::aim(bone_local(up), Eigen::Vector3d::UnitY(), b2 - a, fwd_body);
-      const Eigen::Quaterniond Wl = pose::aim(bone_local(lo), Eigen::Vector3d::UnitY(), c2 - b2, fwd_body);
+      const auto ik = pose::limb_to(w.position[up], w.position[lo], w.position[hand], w.rotation[up], w.rotation[lo],
+                                    cal_[1 + side].position, pole,
+                                    pose::LimbRotation::aimed(bone_local(up), bone_local(lo), Eigen::Vector3d::UnitY(), fwd_body));
       const Eigen::Matrix3d Ht = cal_[1 + side].orientation.toRotationMatrix();
       const Eigen::Quaterniond Wd = pose::aim(bone_local(hand), Eigen::Vector3d::UnitY(), sgn * Ht.col(0), Ht.col(1));
-      pose_.local[up] = (world_.rotation[clav].conjugate() * Wu).normalized();
-      pose_.local[lo] = (Wu.conjugate() * Wl).normalized();
-      pose_.local[hand] = (Wl.conjugate() * Wd).normalized();
+      const int arm[3] = {up, lo, hand};
+      pose::set_limb_locals(out_.pose(), arm, &w.rotation[clav], ik.upper, ik.lower, Wd, true);
     }
   }
 
@@ -254,35 +247,27 @@ class LoBSTrPipeline {
     for (int foot = 0; foot < 2; ++foot) {
       const int* L = meta_.lower + 4 * foot;  // upper leg, lower leg, foot, toes
       const int ul = L[0], ll = L[1], ft = L[2], toe = L[3];
-      const Eigen::Vector3d hip = world_.position[ul];
+      const Eigen::Vector3d hip = out_.world().position[ul];
       const double reach = 1.02 * (s.offsets[ll].norm() + s.offsets[ft].norm()) + s.offsets[toe].norm();
       Eigen::Vector3d target;
-      if (!lock_[foot].update(contact(foot), world_.position[toe], hip, reach, cfg_.lock_max_drift, meta_.toe_height, target)) continue;
+      if (!lock_[foot].update(contact(foot), out_.world().position[toe], hip, reach, cfg_.lock_max_drift, meta_.toe_height, target)) continue;
       // ankle target keeps the foot's world orientation: ankle = target - (toe - ankle)
-      const Eigen::Vector3d ankle_t = target - (world_.position[toe] - world_.position[ft]);
-      const Eigen::Vector3d a = world_.position[ul], b = world_.position[ll], c = world_.position[ft];
+      const Eigen::Vector3d ankle_t = target - (out_.world().position[toe] - out_.world().position[ft]);
+      const pose::WorldPose& w = out_.world();
+      const Eigen::Vector3d &a = w.position[ul], &b = w.position[ll], &c = w.position[ft];
       const Eigen::Vector3d fwd = cal_[3].orientation.toRotationMatrix().col(2);
+      // knee: in the leg's current bend plane, nudged forwards so a straight leg bends forwards
       const Eigen::Vector3d pole = (b - a) - (b - a).dot((c - a).normalized()) * (c - a).normalized() + 0.05 * fwd;
-      Eigen::Vector3d b2, c2;
-      pose::two_bone(a, b, c, ankle_t, pole, b2, c2);
-      const Eigen::Quaterniond Wu = pose::swing(b - a, b2 - a) * world_.rotation[ul];
-      const Eigen::Quaterniond Wl_tmp = pose::swing(b - a, b2 - a) * world_.rotation[ll];
-      const Eigen::Vector3d c_after = b2 + pose::swing(b - a, b2 - a) * (c - b);
-      const Eigen::Quaterniond Wl = pose::swing(c_after - b2, c2 - b2) * Wl_tmp;
-      const Eigen::Quaterniond Wf = world_.rotation[ft];
-      pose_.local[ul] = (world_.rotation[s.parents[ul]].conjugate() * Wu).normalized();
-      pose_.local[ll] = (Wu.conjugate() * Wl).normalized();
-      pose_.local[ft] = (Wl.conjugate() * Wf).normalized();
+      const auto ik = pose::limb_to(a, b, c, w.rotation[ul], w.rotation[ll], ankle_t, pole, pose::LimbRotation::sequential());
+      pose::set_limb_locals(out_.pose(), L, &w.rotation[s.parents[ul]], ik.upper, ik.lower, w.rotation[ft], true);
       changed = true;
     }
-    if (changed) pose::forward_kinematics(s, pose_, world_);
+    if (changed) pose::forward_kinematics(s, out_.pose(), out_.world());
   }
 
   LoBSTrConfig cfg_;
   predict::LoBSTrMeta meta_;
   nn::Network<Net> net_;
-  trackers::TrackerSanitizer sanitizer_;
-  trackers::Resampler resampler_;
   features::Calibration calib_;
   features::LoBSTrFeatures feat_;
   pose::JointMap map_{};
@@ -290,8 +275,6 @@ class LoBSTrPipeline {
   std::array<trackers::PoseD, trackers::kTrackerCount> cal_{};
   T x_[kFeatures] = {};
   T y_[Net::out_size] = {};
-  pose::BodyPose pose_;
-  pose::WorldPose world_;
   pose::FootLock lock_[2];
   std::vector<T> ring_;
   int window_ = 30, filled_ = 0, head_ = 0;
@@ -299,8 +282,16 @@ class LoBSTrPipeline {
   int arm_[2][4] = {};
   int chest_ = 0;
   Eigen::Vector3d lateral_local_ = Eigen::Vector3d::UnitZ();
-  long long frames_ = 0;
-  bool valid_output_ = false;
 };
+
+// The shipped configurations, by name: compact (H = 256, latent 128: examples/weights/
+// lobstr_compact.weights.json) and the paper's size (H = 1024, latent 128), each with float, f16
+// (half the weight bytes) or int8 (a quarter) weight storage.
+using LoBSTrCompact = LoBSTrPipeline<float, 256, 128>;
+using LoBSTrCompactF16 = LoBSTrPipeline<float, 256, 128, nn::f16>;
+using LoBSTrCompactQ8 = LoBSTrPipeline<float, 256, 128, nn::q8>;
+using LoBSTrPaper = LoBSTrPipeline<float, 1024, 128>;
+using LoBSTrPaperF16 = LoBSTrPipeline<float, 1024, 128, nn::f16>;
+using LoBSTrPaperQ8 = LoBSTrPipeline<float, 1024, 128, nn::q8>;
 
 }  // namespace sparsebody::avatar

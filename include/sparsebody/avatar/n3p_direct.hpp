@@ -5,7 +5,8 @@
 //     -> N3PCalibration (device -> head / wrist joints, height scale, §7)
 //     -> N3PPredictor (Eq. (2): G_sig -> G_lo -> heading update -> G_up; o* for missing controllers)
 //     -> direct-mode IK (§7, "to enforce foot contacts and achieve accurate tracker positions"):
-//        feet in contact (c > threshold) are pinned (FootPin below) with two-bone leg IK;
+//        feet in contact (c > threshold) are pinned at the ankle (pose::FootLock, below) with
+//        two-bone leg IK;
 //        hands are put on the measured controllers with two-bone arm IK.
 //
 // Tracker modes, per frame from the validity flags (§8.2): 3-point; one controller (the missing one
@@ -23,9 +24,9 @@
 // The output pose is always finite: a frame that would not be keeps the last pose.
 // Per frame: no allocation, no exception, no lock. Everything is sized at construction.
 //
-// Use (the LoBSTr pipeline's shape):
-//   auto w = avatar::N3PPipeline<>::load("examples/weights/n3p");   // n3p_{signal,lower,upper}.json
-//   avatar::N3PPipeline<> p(w);
+// Use (the LoBSTr pipeline's shape; N3PDirect is the shipped weights' configuration):
+//   auto w = avatar::N3PDirect::load("examples/weights/n3p");   // n3p_{signal,lower,upper}.json
+//   avatar::N3PDirect p(w);
 //   p.calibrate(tpose_frame);                  // optional, §7
 //   for (frame : frames) { p.push(frame); if (p.has_output()) use(p.pose(), p.world(), p.user_scale()); }
 #pragma once
@@ -33,13 +34,15 @@
 #include <cmath>
 #include <string>
 
-#include "sparsebody/predict/n3p_predictor.hpp"
+#include "sparsebody/avatar/pipeline_front_end.hpp"
 #include "sparsebody/features/n3p_calibration.hpp"
+#include "sparsebody/nn/half.hpp"
+#include "sparsebody/nn/int8.hpp"
 #include "sparsebody/pose/body_pose.hpp"
+#include "sparsebody/pose/contact.hpp"
 #include "sparsebody/pose/ik.hpp"
 #include "sparsebody/pose/joint_map.hpp"
-#include "sparsebody/trackers/resampler.hpp"
-#include "sparsebody/trackers/sanitizer.hpp"
+#include "sparsebody/predict/n3p_predictor.hpp"
 
 namespace sparsebody::avatar {
 
@@ -53,73 +56,23 @@ struct N3PConfig {
   trackers::SanitizerConfig sanitizer{};
 };
 
-// Direct-mode foot pinning, one foot (the ankle joint):
-//   contact on              -> the ankle position of that frame becomes the pin; leg IK holds it;
-//   contact off, or the pin out of the leg's reach from the hip, or further than `max_drift` from
-//   the predicted ankle     -> released over `blend` frames: the target moves from the pin to the
-//                              prediction with w_k = (1 - cos(pi k / n)) / 2; a pin released for
-//                              distance is not re-made until the contact flag goes off once.
-class FootPin {
- public:
-  enum class State { Free, Pinned, Releasing };
-  explicit FootPin(int blend = 8) : n_(blend) {}
-  void reset() noexcept { state_ = State::Free; hold_off_ = false; }
-  State state() const noexcept { return state_; }
-
-  // Returns true when IK must put the ankle at `target`.
-  bool update(bool contact, const Eigen::Vector3d& ankle, const Eigen::Vector3d& hip, double reach, double max_drift,
-              Eigen::Vector3d& target) noexcept {
-    if (!contact) hold_off_ = false;
-    if (state_ == State::Pinned && ((pin_ - hip).norm() > reach || (pin_ - ankle).norm() > max_drift)) {
-      hold_off_ = true;
-      contact = false;
-    }
-    contact = contact && !hold_off_;
-    if (contact && state_ != State::Pinned) {
-      pin_ = state_ == State::Releasing ? current_ : ankle;
-      state_ = State::Pinned;
-    } else if (!contact && state_ == State::Pinned) {
-      state_ = State::Releasing;
-      from_ = pin_;
-      k_ = 0;
-    }
-    if (state_ == State::Pinned) {
-      target = current_ = pin_;
-      return true;
-    }
-    if (state_ == State::Releasing) {
-      const double w = 0.5 - 0.5 * std::cos(M_PI * ++k_ / n_);
-      target = current_ = (1 - w) * from_ + w * ankle;
-      if (k_ >= n_) state_ = State::Free;
-      return true;
-    }
-    return false;
-  }
-
- private:
-  int n_, k_ = 0;
-  State state_ = State::Free;
-  bool hold_off_ = false;
-  Eigen::Vector3d pin_ = Eigen::Vector3d::Zero(), from_ = Eigen::Vector3d::Zero(), current_ = Eigen::Vector3d::Zero();
-};
-
 template <typename T = float, int HSig = 64, int HLo = 128, int HUp = 128, typename W = T>
-class N3PPipeline {
+class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
+  using Base = PipelineFrontEnd<N3PPipeline>;
+
  public:
   using Predictor = predict::N3PPredictor<T, HSig, HLo, HUp, W>;
   using Weights = typename Predictor::Weights;
+  static constexpr int kHiddenSignal = HSig, kHiddenLower = HLo, kHiddenUpper = HUp;
 
   // prefix ("…/n3p") or any of the three files; throws LoadError.
   static Weights load(const std::string& path) { return Predictor::load(path); }
 
   explicit N3PPipeline(const Weights& w, N3PConfig cfg = {})
-      : cfg_(cfg), pred_(w), sanitizer_(cfg.sanitizer), resampler_(pred_.meta().frame_rate) {
+      : cfg_(cfg), pred_(w) {
     const pose::Skeleton& s = pred_.skeleton();
     map_ = pose::JointMap::from_names(s, w.lo->info().source);
-    pose_.resize(s.size());
-    last_pose_.resize(s.size());
-    world_.resize(s.size());
-    last_world_.resize(s.size());
+    this->start_front_end(pred_.meta().frame_rate, cfg.sanitizer, s.size());
     auto f = [&](const char* n) { return s.find(n); };
     const char* arm[2][3] = {{"UpperArm_L", "LowerArm_L", "Hand_L"}, {"UpperArm_R", "LowerArm_R", "Hand_R"}};
     const char* leg[2][3] = {{"UpperLeg_L", "LowerLeg_L", "Foot_L"}, {"UpperLeg_R", "LowerLeg_R", "Foot_R"}};
@@ -143,17 +96,12 @@ class N3PPipeline {
   }
 
   // --- running ------------------------------------------------------------------------------
-  // One input frame at any rate; runs one model step per 30 Hz tick it completes. Returns the
-  // number of steps run.
-  int push(const trackers::TrackerFrame& f) noexcept {
-    return resampler_.push(f, [this](const trackers::TrackerFrame& tick, bool gap) { step(tick, gap); });
-  }
-
+  // push(frame) (any rate, PipelineFrontEnd) runs step once per 30 Hz tick.
   // One model frame (the caller did the resampling). `restart`: state reset before this frame.
   void step(const trackers::TrackerFrame& f, bool restart = false) noexcept {
     trackers::TrackerFrame head_only = f;  // the sanitizer looks after the headset only
     head_only.valid[1] = head_only.valid[2] = head_only.valid[3] = false;
-    const trackers::SanitizedFrame& s = sanitizer_.process(head_only, 1.0 / pred_.meta().frame_rate);
+    const trackers::SanitizedFrame& s = stream_.sanitize(head_only);
     if (restart || s.reset) reset_state();
     ++frames_;
     if (!s.usable) return;  // no headset yet: no output (or the last one is kept)
@@ -168,38 +116,24 @@ class N3PPipeline {
     trackers_ = o;
     present_ = present;
     if (!pred_.step(o, present)) return;
-    pose_ = pred_.pose();  // same size: no allocation
-    pose::forward_kinematics(pred_.skeleton(), pose_, world_);
+    out_.pose() = pred_.pose();  // same size: no allocation
+    pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
     if (cfg_.foot_ik) pin_feet();
     if (cfg_.hand_ik)
       for (int side = 0; side < 2; ++side)
-        if (present[1 + side]) limb_to(arm_[side], o[1 + side].p);
-    if (cfg_.foot_ik || cfg_.hand_ik) pose::forward_kinematics(pred_.skeleton(), pose_, world_);
-    if (!finite_pose()) {  // never hand out a NaN: keep the last pose and restart
-      reset_state();
-      pose_ = last_pose_;
-      world_ = last_world_;
-      return;
-    }
-    last_pose_ = pose_;
-    last_world_ = world_;
-    valid_output_ = true;
+        if (present[1 + side]) put_limb(arm_[side], o[1 + side].p);
+    if (cfg_.foot_ik || cfg_.hand_ik) pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
+    if (!out_.commit()) reset_state();  // never hand out a NaN: the last pose is kept; restart
   }
 
   void reset() noexcept {
     reset_state();
-    sanitizer_.reset();
-    resampler_.reset();
-    frames_ = 0;
-    valid_output_ = false;
+    this->reset_front_end();
   }
 
   // --- results ------------------------------------------------------------------------------
-  // The pose on the standard skeleton in its scale (metres); multiply positions and offsets by
-  // user_scale() for the user's size. Valid when has_output().
-  const pose::BodyPose& pose() const noexcept { return pose_; }
-  const pose::WorldPose& world() const noexcept { return world_; }
-  bool has_output() const noexcept { return valid_output_; }
+  // pose(), world(), has_output(), frames() (PipelineFrontEnd): the pose on the standard skeleton
+  // in its scale (metres); multiply positions and offsets by user_scale() for the user's size.
   double user_scale() const noexcept { return 1.0 / calib_.base.scale; }
   const pose::Skeleton& skeleton() const noexcept { return pred_.skeleton(); }
   const pose::JointMap& joint_map() const noexcept { return map_; }
@@ -207,10 +141,9 @@ class N3PPipeline {
   const Predictor& predictor() const noexcept { return pred_; }
   double contact_probability(int foot) const noexcept { return pred_.contact(foot); }
   bool contact(int foot) const noexcept { return contact_probability(foot) > cfg_.contact_threshold; }
-  bool foot_locked(int foot) const noexcept { return lock_[foot].state() != FootPin::State::Free; }
+  bool foot_locked(int foot) const noexcept { return lock_[foot].state() != pose::FootLock::State::Free; }
   // Controllers replaced by o* in the last frame (0: 3-point, 1: one controller, 2: HMD only).
   int predicted_controllers() const noexcept { return pred_.substituted(1) + pred_.substituted(2); }
-  long long frames() const noexcept { return frames_; }
   // The calibrated trackers of the last usable frame (joint poses, standard-skeleton scale) and which
   // were measured (the others are stale); read by the physics mode's combined control predictor.
   const features::n3p::TrackerSet& trackers() const noexcept { return trackers_; }
@@ -218,6 +151,10 @@ class N3PPipeline {
   const N3PConfig& config() const noexcept { return cfg_; }
 
  private:
+  using Base::frames_;
+  using Base::out_;
+  using Base::stream_;
+
   void reset_state() noexcept {
     pred_.reset();
     lock_[0].reset();
@@ -238,59 +175,50 @@ class N3PPipeline {
     return true;
   }
 
-  bool finite_pose() const noexcept {
-    bool ok = pose_.root_position.allFinite();
-    for (std::size_t j = 0; j < pose_.local.size(); ++j)
-      ok &= pose_.local[j].coeffs().allFinite() && world_.position[j].allFinite();
-    return ok;
-  }
-
-  // Feet in contact stay where contact began (FootPin), the leg bent to reach them.
+  // Feet in contact stay where contact began (lock_), the leg bent to reach them.
   void pin_feet() noexcept {
     for (int side = 0; side < 2; ++side) {
       const int* l = leg_[side];
       Eigen::Vector3d target;
-      if (lock_[side].update(contact(side), world_.position[l[2]], world_.position[l[0]], reach_[side], cfg_.foot_max_drift,
+      if (lock_[side].update(contact(side), out_.world().position[l[2]], out_.world().position[l[0]], reach_[side], cfg_.foot_max_drift,
                              target)) {
-        limb_to(l, target);
-        pose::forward_kinematics(pred_.skeleton(), pose_, world_);
+        put_limb(l, target);
+        pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
       }
     }
   }
 
-  // Two-bone IK on the chain a -> b -> c (c's world rotation kept): c goes to `target`.
-  void limb_to(const int* j, const Eigen::Vector3d& target) noexcept {
-    const int a = j[0], b = j[1], c = j[2];
-    const Eigen::Vector3d pa = world_.position[a], pb = world_.position[b], pc = world_.position[c];
-    Eigen::Vector3d nb, nc;
-    pose::two_bone(pa, pb, pc, target, pb - pa, nb, nc);
-    const Eigen::Quaterniond s1 = pose::swing(pb - pa, nb - pa);
-    const Eigen::Quaterniond qa = (s1 * world_.rotation[a]).normalized();
-    const Eigen::Quaterniond qb = (pose::swing(s1 * (pc - pb), nc - nb) * s1 * world_.rotation[b]).normalized();
-    const Eigen::Quaterniond qc = world_.rotation[c];
-    const int pa_parent = pred_.skeleton().parents[a];
-    pose_.local[a] = pa_parent < 0 ? qa : Eigen::Quaterniond(world_.rotation[pa_parent].conjugate() * qa);
-    pose_.local[b] = qa.conjugate() * qb;
-    pose_.local[c] = qb.conjugate() * qc;
-    world_.rotation[a] = qa;
-    world_.rotation[b] = qb;
+  // Two-bone IK on the chain j[0] -> j[1] -> j[2] (pose::limb_to, bent in its current plane, the
+  // end's world rotation kept, world rotations renormalised): the end goes to `target`. The world
+  // pose is stale until the caller's forward kinematics.
+  void put_limb(const int* j, const Eigen::Vector3d& target) noexcept {
+    const pose::WorldPose& w = out_.world();
+    const Eigen::Vector3d &pa = w.position[j[0]], &pb = w.position[j[1]], &pc = w.position[j[2]];
+    const auto s = pose::limb_to(pa, pb, pc, w.rotation[j[0]], w.rotation[j[1]], target, pb - pa);
+    const int parent = pred_.skeleton().parents[j[0]];
+    pose::set_limb_locals(out_.pose(), j, parent < 0 ? nullptr : &w.rotation[parent], s.upper.normalized(),
+                          s.lower.normalized(), w.rotation[j[2]], false);
   }
 
   N3PConfig cfg_;
   Predictor pred_;
-  trackers::TrackerSanitizer sanitizer_;
-  trackers::Resampler resampler_;
   features::n3p::N3PCalibration calib_;
   pose::JointMap map_;
-  pose::BodyPose pose_, last_pose_;
-  pose::WorldPose world_, last_world_;
-  FootPin lock_[2];
+  // Direct-mode foot pinning (pose::FootLock): the ankle pinned where contact began (its own
+  // height), released over 8 frames; a pin released for distance needs the contact to go off on a
+  // later frame before it pins again.
+  pose::FootLock lock_[2] = {pose::FootLock(8, pose::FootLock::Rearm::NextFrame),
+                             pose::FootLock(8, pose::FootLock::Rearm::NextFrame)};
   features::n3p::TrackerSet trackers_{};
   std::array<bool, 3> present_{};
   int arm_[2][3] = {}, leg_[2][3] = {};
   double reach_[2] = {};
-  long long frames_ = 0;
-  bool valid_output_ = false;
 };
+
+// The shipped configuration, by name: the paper's sizes (G_sig / G_lo / G_up hidden 64 / 128 / 128:
+// examples/weights/n3p_*.json) with float, f16 (half the weight bytes) or int8 (a quarter) storage.
+using N3PDirect = N3PPipeline<float, 64, 128, 128>;
+using N3PDirectF16 = N3PPipeline<float, 64, 128, 128, nn::f16>;
+using N3PDirectQ8 = N3PPipeline<float, 64, 128, 128, nn::q8>;
 
 }  // namespace sparsebody::avatar

@@ -181,7 +181,8 @@ class N3PControlPredictor {
  private:
   using Snapshot = typename Predictor::Snapshot;
 
-  // Step 3: two-bone IK of each present controller's arm in g (heading h), as direct mode's limb_to.
+  // Step 3: two-bone IK of each present controller's arm in g (heading h): pose::limb_to as direct
+  // mode's arms (bent in the predicted plane, Composed swings, here on 6D rotation matrices).
   void arms_to_trackers(const features::HeadingFrame& h, const features::n3p::TrackerSet& x, const std::array<bool, 3>& present,
                         std::array<T, features::n3p::kGup>& g) const noexcept {
     using B = features::n3p::UpperBlock;
@@ -196,18 +197,14 @@ class N3PControlPredictor {
         p[c] = Eigen::Vector3d(double(q[0]), double(q[1]), double(q[2]));
       }
       for (int c = 0; c < 2; ++c) R[c] = pose::from6d(g.data() + B::rot(arm_[side][c]));
-      Eigen::Vector3d nb, nc;
-      pose::two_bone(p[0], p[1], p[2], target, p[1] - p[0], nb, nc);
-      const Eigen::Quaterniond s1 = pose::swing(p[1] - p[0], nb - p[0]);
-      const Eigen::Matrix3d Ra = s1.toRotationMatrix() * R[0];
-      const Eigen::Matrix3d Rb = (pose::swing(s1 * (p[2] - p[1]), nc - nb) * s1).toRotationMatrix() * R[1];
-      if (!nb.allFinite() || !nc.allFinite() || !Ra.allFinite() || !Rb.allFinite()) continue;
+      const pose::LimbSolution<Eigen::Matrix3d> ik = pose::limb_to(p[0], p[1], p[2], R[0], R[1], target, p[1] - p[0]);
+      if (!ik.b.allFinite() || !ik.c.allFinite() || !ik.upper.allFinite() || !ik.lower.allFinite()) continue;
       for (int a = 0; a < 3; ++a) {
-        g[B::pos(arm_[side][1]) + a] = static_cast<T>(nb[a]);
-        g[B::pos(arm_[side][2]) + a] = static_cast<T>(nc[a]);
+        g[B::pos(arm_[side][1]) + a] = static_cast<T>(ik.b[a]);
+        g[B::pos(arm_[side][2]) + a] = static_cast<T>(ik.c[a]);
       }
-      pose::to6d<T>(Ra, g.data() + B::rot(arm_[side][0]));
-      pose::to6d<T>(Rb, g.data() + B::rot(arm_[side][1]));
+      pose::to6d<T>(ik.upper, g.data() + B::rot(arm_[side][0]));
+      pose::to6d<T>(ik.lower, g.data() + B::rot(arm_[side][1]));
     }
   }
   Predictor pred_;

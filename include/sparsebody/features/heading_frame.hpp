@@ -21,17 +21,34 @@
 
 namespace sparsebody::features {
 
-// Rotation about +Y whose Z axis is the ground projection of `forward`; `fallback` when vertical.
-inline Eigen::Matrix3d yaw_frame(const Eigen::Vector3d& forward, const Eigen::Matrix3d& fallback) noexcept {
-  Eigen::Vector3d f(forward.x(), 0.0, forward.z());
-  const double n = f.norm();
-  if (!(n >= 1e-3)) return fallback;
-  const Eigen::Vector3d z = f / n;
+// theta_y of a forward direction: the angle about +Y from +Z to its ground projection,
+// atan2(f_x, f_z); 0 when it has none (|f_x| + |f_z| <= min_ground: vertical). The one heading
+// definition of the library (HeadingFrame::from, yaw_frame; Python twins: weights_tool/n3p/layout.py
+// heading_from_forward, weights_tool/lobstr/rotations.py yaw_frame). A float vector keeps float
+// arithmetic (min_ground in its type).
+template <class Derived>
+inline typename Derived::Scalar heading_angle(const Eigen::MatrixBase<Derived>& forward,
+                                              typename Derived::Scalar min_ground = typename Derived::Scalar(1e-12)) noexcept {
+  using S = typename Derived::Scalar;
+  return (std::abs(forward.x()) + std::abs(forward.z()) > min_ground) ? S(std::atan2(forward.x(), forward.z())) : S(0);
+}
+
+// R_y(theta) (the matrix in the header comment).
+inline Eigen::Matrix3d yaw_rotation(double theta) noexcept {
+  const double c = std::cos(theta), s = std::sin(theta);
   Eigen::Matrix3d R;
-  R.col(0) = Eigen::Vector3d(z.z(), 0.0, -z.x());
-  R.col(1) = Eigen::Vector3d::UnitY();
-  R.col(2) = z;
+  R << c, 0, s, 0, 1, 0, -s, 0, c;
   return R;
+}
+
+// Rotation about +Y whose Z axis is the ground projection of `forward`: R_y(heading_angle(forward));
+// `fallback` when the projection is shorter than 1e-3 (near vertical) or not finite. Built from
+// atan2 then cos/sin, it differs from normalising the projection (what the Python twin does) by
+// rounding only (~1e-16).
+inline Eigen::Matrix3d yaw_frame(const Eigen::Vector3d& forward, const Eigen::Matrix3d& fallback) noexcept {
+  const Eigen::Vector3d ground(forward.x(), 0.0, forward.z());
+  if (!(ground.norm() >= 1e-3)) return fallback;
+  return yaw_rotation(heading_angle(forward));
 }
 
 // theta wrapped to (-pi, pi] as atan2(sin, cos) (the same expression as the Python side).
@@ -42,20 +59,14 @@ struct HeadingFrame {
 
   static HeadingFrame identity() noexcept { return {}; }
 
-  // From a floor position (its y is ignored) and a forward direction whose ground projection gives
-  // theta = atan2(f_x, f_z). A forward along Y (no ground projection) gives theta = 0.
+  // From a floor position (its y is ignored) and a forward direction: theta = heading_angle(f)
+  // (atan2(f_x, f_z); a forward along Y, with no ground projection, gives theta = 0).
   static HeadingFrame from(const Eigen::Vector3d& position, const Eigen::Vector3d& forward) noexcept {
-    const double t = (std::abs(forward.x()) + std::abs(forward.z()) > 1e-12) ? std::atan2(forward.x(), forward.z()) : 0.0;
-    return {position.x(), position.z(), t};
+    return {position.x(), position.z(), heading_angle(forward)};
   }
 
   // R_y(theta).
-  Eigen::Matrix3d rotation() const noexcept {
-    const double c = std::cos(theta), s = std::sin(theta);
-    Eigen::Matrix3d R;
-    R << c, 0, s, 0, 1, 0, -s, 0, c;
-    return R;
-  }
+  Eigen::Matrix3d rotation() const noexcept { return yaw_rotation(theta); }
 
   // h (x) d: composition, d expressed in this frame.
   HeadingFrame operator*(const HeadingFrame& d) const noexcept {

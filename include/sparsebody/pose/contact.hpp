@@ -1,14 +1,17 @@
-// Foot contact post-processing (paper §3.4.1), one foot:
-//   contact turns on   -> the toe-base position at that frame, put at its standing height above
-//                         the floor, becomes the lock target; leg IK holds the toe there while
-//                         contact stays on;
-//   contact turns off  -> for `blend_frames` (10) frames the target moves from the lock position
-//                         to the network's toe position with the slow-in-slow-out weight
-//                         w_k = (1 - cos(pi k / n)) / 2 (a shifted sine), then IK stops;
+// Foot contact locking, one foot: the joint IK holds in place while the foot is in contact.
+//   contact turns on   -> the joint's position at that frame becomes the lock target, either at a
+//                         given height (LoBSTr, paper §3.4.1: the toe base at its standing height
+//                         above the floor) or at its own height (Neural3Points direct mode, §7: the
+//                         ankle); leg IK holds the joint there while contact stays on;
+//   contact turns off  -> for `blend_frames` frames (LoBSTr 10, Neural3Points 8) the target moves
+//                         from the lock position to the predicted joint position with the
+//                         slow-in-slow-out weight w_k = (1 - cos(pi k / n)) / 2, then IK stops;
 //   contact on again while blending -> locks at the current blended position.
 // A lock the leg cannot reach any more (further than `max_reach` from the hip), or one the
-// network's own toe has left by more than `max_drift` (it says the foot is elsewhere: a missed
-// contact release), is released through the same blend, so a foot is never dragged behind.
+// predicted joint has left by more than `max_drift` (the network says the foot is elsewhere: a
+// missed contact release), is released through the same blend and held off: it does not lock again
+// until the contact flag has gone off once. Rearm says whether the release frame's own "off"
+// counts (SameFrame, LoBSTr) or only a later one does (NextFrame, Neural3Points).
 #pragma once
 #include <cmath>
 
@@ -19,25 +22,42 @@ namespace sparsebody::pose {
 class FootLock {
  public:
   enum class State { Free, Locked, Blending };
+  enum class Rearm { SameFrame, NextFrame };
 
-  explicit FootLock(int blend_frames = 10) : n_(blend_frames) {}
+  explicit FootLock(int blend_frames = 10, Rearm rearm = Rearm::SameFrame) : n_(blend_frames), rearm_(rearm) {}
   void reset() noexcept { state_ = State::Free; hold_off_ = false; }
   State state() const noexcept { return state_; }
 
-  // One frame: contact state, the network's toe position, the hip position and the leg's reach.
-  // Returns true when IK must place the toe at `target`.
-  bool update(bool contact, const Eigen::Vector3d& toe, const Eigen::Vector3d& hip, double max_reach,
-              double max_drift, double toe_height, Eigen::Vector3d& target) noexcept {
-    const bool network_contact = contact;
-    if (state_ == State::Locked && ((lock_ - hip).norm() > max_reach || (lock_ - toe).norm() > max_drift)) {
+  // One frame: contact state, the predicted joint (toe) position, the hip position and the leg's
+  // reach; a new lock is put at `lock_height`. Returns true when IK must place the joint at `target`.
+  bool update(bool contact, const Eigen::Vector3d& joint, const Eigen::Vector3d& hip, double max_reach, double max_drift,
+              double lock_height, Eigen::Vector3d& target) noexcept {
+    return step(contact, joint, hip, max_reach, max_drift, &lock_height, target);
+  }
+  // The same with a new lock at the joint's own height (the ankle pin of direct mode).
+  bool update(bool contact, const Eigen::Vector3d& joint, const Eigen::Vector3d& hip, double max_reach, double max_drift,
+              Eigen::Vector3d& target) noexcept {
+    return step(contact, joint, hip, max_reach, max_drift, nullptr, target);
+  }
+
+ private:
+  bool step(bool contact, const Eigen::Vector3d& joint, const Eigen::Vector3d& hip, double max_reach, double max_drift,
+              const double* lock_height, Eigen::Vector3d& target) noexcept {
+    const bool predicted_contact = contact;
+    if (rearm_ == Rearm::NextFrame && !predicted_contact) hold_off_ = false;
+    if (state_ == State::Locked && ((lock_ - hip).norm() > max_reach || (lock_ - joint).norm() > max_drift)) {
       contact = false;
-      hold_off_ = true;  // do not re-lock until the network's contact goes off once
+      hold_off_ = true;  // do not re-lock until the contact goes off once
     }
-    if (!network_contact) hold_off_ = false;
+    if (rearm_ == Rearm::SameFrame && !predicted_contact) hold_off_ = false;
     if (hold_off_) contact = false;
     switch (state_) {
       case State::Free:
-        if (contact) { state_ = State::Locked; lock_ = toe; lock_.y() = toe_height; }
+        if (contact) {
+          state_ = State::Locked;
+          lock_ = joint;
+          if (lock_height) lock_.y() = *lock_height;
+        }
         break;
       case State::Locked:
         if (!contact) { state_ = State::Blending; from_ = lock_; k_ = 0; }
@@ -53,16 +73,16 @@ class FootLock {
     if (state_ == State::Blending) {
       ++k_;
       const double w = 0.5 - 0.5 * std::cos(M_PI * k_ / n_);
-      target = current_ = (1 - w) * from_ + w * toe;
+      target = current_ = (1 - w) * from_ + w * joint;
       if (k_ >= n_) state_ = State::Free;
       return true;
     }
-    current_ = toe;
+    current_ = joint;
     return false;
   }
 
- private:
   int n_;
+  Rearm rearm_;
   State state_ = State::Free;
   int k_ = 0;
   bool hold_off_ = false;

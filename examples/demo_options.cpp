@@ -1,0 +1,64 @@
+#include "demo_options.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+
+#include "sparsebody/nn/int8.hpp"
+
+namespace demo {
+
+const char* Options::default_storage() noexcept {
+#if SPARSEBODY_Q8_AVX512
+  return "q8";
+#else
+  return "float";
+#endif
+}
+
+void usage(const char* msg) {
+  std::fprintf(stderr,
+               "%s\nusage: sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p] [--no-pelvis]\n"
+               "                       [--weights FILE (LoBSTr) | DIR (Neural3Points: n3p_{signal,lower,upper}.json)]\n"
+               "                       [--mode streaming|window] [--no-contact-ik] [--trackers-out trackers.csv]\n"
+               "                       [--calibration-frame N] [--storage float|f16|q8] [--physics] [--quiet]\n",
+               msg);
+  std::exit(2);
+}
+
+Options parse_options(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> std::string { if (i + 1 >= argc) usage(("missing value after " + a).c_str()); return argv[++i]; };
+    if (a == "-o" || a == "--output") o.output = next();
+    else if (a == "--weights") o.weights = next();
+    else if (a == "--model") {
+      const std::string m = next();
+      if (m == "auto") o.model = Model::Auto;
+      else if (m == "lobstr") o.model = Model::LoBSTr;
+      else if (m == "n3p" || m == "neural3points") o.model = Model::N3P;
+      else usage("--model must be auto, lobstr or n3p");
+    } else if (a == "--no-pelvis") o.no_pelvis = true;
+    else if (a == "--physics") o.physics = true;
+    else if (a == "--storage") {
+      o.storage = next();
+      if (o.storage != "float" && o.storage != "f16" && o.storage != "q8") usage("--storage must be float, f16 or q8");
+    }
+    else if (a == "--mode") {
+      const std::string m = next();
+      if (m == "streaming") o.mode = sparsebody::avatar::RunMode::Streaming;
+      else if (m == "window") o.mode = sparsebody::avatar::RunMode::Window;
+      else usage("--mode must be streaming or window");
+    } else if (a == "--no-contact-ik") o.contact_ik = false;
+    else if (a == "--trackers-out") o.trackers_out = next();
+    else if (a == "--calibration-frame") o.calibration_frame = std::stoi(next());
+    else if (a == "--quiet") o.quiet = true;
+    else if (a == "-h" || a == "--help") usage("full-body avatar from sparse VR trackers (LoBSTr or Neural3Points)");
+    else if (!a.empty() && a[0] == '-') usage(("unknown option " + a).c_str());
+    else o.input = a;
+  }
+  if (o.input.empty()) usage("no input file");
+  return o;
+}
+
+}  // namespace demo

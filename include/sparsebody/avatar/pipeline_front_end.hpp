@@ -1,0 +1,63 @@
+// The front end the pipelines share (CRTP): tracker frames at any rate in (push), one
+// Derived::step(tick, gap) per model tick (trackers/tracker_stream.hpp), and the guarded output
+// pose (pose/pose_output.hpp): pose(), world(), has_output(), frames().
+//
+// Derived provides `void step(const trackers::TrackerFrame& tick, bool gap) noexcept`, which
+// sanitises the tick (stream_.sanitize), counts it (++frames_), builds its frame in out_.pose() /
+// out_.world() and commits it (out_.commit(): a frame that is not finite keeps the last one). Its
+// constructor calls start_front_end once its model rate and skeleton are known, its reset()
+// calls reset_front_end().
+#pragma once
+#include <utility>
+
+#include "sparsebody/pose/pose_output.hpp"
+#include "sparsebody/trackers/tracker_stream.hpp"
+
+namespace sparsebody::avatar {
+
+template <class Derived>
+class PipelineFrontEnd {
+ public:
+  // Feeds one input frame at any rate; runs one model step per model tick it completes.
+  // Returns the number of steps run (0 when the frame falls between ticks).
+  int push(const trackers::TrackerFrame& f) noexcept {
+    return stream_.push(f, [this](const trackers::TrackerFrame& tick, bool gap) { self().step(tick, gap); });
+  }
+  // The same, calling after(tick, gap) after each step: for a pipeline that runs on this one's
+  // output (the physics mode on direct mode) and so shares its ticks.
+  template <class After>
+  int push(const trackers::TrackerFrame& f, After&& after) noexcept {
+    return stream_.push(f, [this, &after](const trackers::TrackerFrame& tick, bool gap) {
+      self().step(tick, gap);
+      after(tick, gap);
+    });
+  }
+
+  // The pose on the pipeline's skeleton; valid when has_output().
+  const pose::BodyPose& pose() const noexcept { return out_.pose(); }
+  const pose::WorldPose& world() const noexcept { return out_.world(); }
+  bool has_output() const noexcept { return out_.has_output(); }
+  long long frames() const noexcept { return frames_; }  // model frames stepped since the last reset
+
+ protected:
+  PipelineFrontEnd() = default;
+
+  void start_front_end(double fps, const trackers::SanitizerConfig& cfg, int joints) {
+    stream_ = trackers::TrackerStream(fps, cfg);
+    out_.resize(joints);
+  }
+  void reset_front_end() noexcept {
+    stream_.reset();
+    out_.reset();
+    frames_ = 0;
+  }
+
+  trackers::TrackerStream stream_;
+  pose::PoseOutput out_;
+  long long frames_ = 0;
+
+ private:
+  Derived& self() noexcept { return static_cast<Derived&>(*this); }
+};
+
+}  // namespace sparsebody::avatar

@@ -1,0 +1,42 @@
+// The tracker side of every pipeline's front end: frames at any rate in, model-rate ticks out
+// (Resampler: interpolated, a time gap flagged), and each tick's bad input made defined
+// (TrackerSanitizer, with the model period as its dt). A pipeline pushes frames through push() and
+// sanitises the ticks it receives in its step (a step may also be fed ticks directly by a caller
+// that resamples itself, e.g. the physics mode feeding its direct-mode pipeline).
+// No allocation, no exception.
+#pragma once
+#include <utility>
+
+#include "sparsebody/trackers/resampler.hpp"
+#include "sparsebody/trackers/sanitizer.hpp"
+
+namespace sparsebody::trackers {
+
+class TrackerStream {
+ public:
+  explicit TrackerStream(double fps = 30.0, SanitizerConfig cfg = {}, double max_gap = 0.25)
+      : resampler_(fps, max_gap), sanitizer_(cfg) {}
+
+  // Calls on_tick(const TrackerFrame& tick, bool gap) for every model tick up to f.time; gap: the
+  // clock restarted at this tick (time jump or the first frame after one). Returns the tick count.
+  template <class OnTick>
+  int push(const TrackerFrame& f, OnTick&& on_tick) noexcept {
+    return resampler_.push(f, std::forward<OnTick>(on_tick));
+  }
+
+  // One model tick, sanitised with dt = the model period.
+  const SanitizedFrame& sanitize(const TrackerFrame& tick) noexcept { return sanitizer_.process(tick, resampler_.period()); }
+
+  void reset() noexcept {
+    sanitizer_.reset();
+    resampler_.reset();
+  }
+
+  double period() const noexcept { return resampler_.period(); }
+
+ private:
+  Resampler resampler_;
+  TrackerSanitizer sanitizer_;
+};
+
+}  // namespace sparsebody::trackers
