@@ -19,9 +19,9 @@
 using namespace sparsebody;
 
 namespace {
-using Physics = avatar::N3PPhysicsPipeline<float, 64, 128, 128>;
-// The same with int8 network weights (nn/int8.hpp): the predictor part drops from ~150 to ~17 us.
-using PhysicsQ8 = avatar::N3PPhysicsPipeline<float, 64, 128, 128, float, 24, 72, nn::q8>;
+using Physics = avatar::N3PPhysicsDefault;
+// The same with int8 network weights (nn/int8.hpp): the predictor part is several times faster.
+using PhysicsQ8 = avatar::N3PPhysicsQ8;
 
 template <class P = Physics>
 const typename P::Weights* weights() {

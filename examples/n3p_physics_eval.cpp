@@ -34,7 +34,7 @@
 #include "sparsebody/pose/rotation6d.hpp"
 
 using namespace sparsebody;
-using Physics = avatar::N3PPhysicsPipeline<float, 64, 128, 128>;
+using Physics = avatar::N3PPhysicsDefault;
 
 namespace {
 

@@ -8,7 +8,7 @@
 
 namespace n3p_physics_test {
 
-using Physics = sparsebody::avatar::N3PPhysicsPipeline<float, 64, 128, 128>;
+using Physics = sparsebody::avatar::N3PPhysicsDefault;
 
 inline const Physics::Weights& weights() {
   static const Physics::Weights w = Physics::load(SPARSEBODY_N3P_WEIGHTS);

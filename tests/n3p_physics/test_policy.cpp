@@ -93,7 +93,7 @@ TEST_CASE("n3p physics policy input and policy: C++ equals PyTorch (float <= 1e-
 // it must run, keep its output finite, count its control steps, recover from the falls an
 // untrained policy causes, and allocate nothing per frame.
 TEST_CASE("n3p physics policy path: runs, recovers from falls, no allocation per frame") {
-  using Physics = avatar::N3PPhysicsPipeline<float, 64, 128, 128>;
+  using Physics = avatar::N3PPhysicsDefault;
   const std::string dir = std::string(SPARSEBODY_BINARY_DIR) + "/n3p_physics_reference";
   std::ifstream probe(dir + "/n3p_policy_random.json");
   REQUIRE_MESSAGE(probe.good(), "run the parity test case first (it writes the random policy)");
@@ -137,7 +137,7 @@ TEST_CASE("n3p physics policy path: runs, recovers from falls, no allocation per
 // t+6), each hand joint is on its controller (received at t, forecast by Eq. (18) after it) unless
 // out of the arm's reach, where the arm is straight towards it; without the IK it is not.
 TEST_CASE("n3p control predictor: the rollout's hands are put on the trackers by IK") {
-  using Physics = avatar::N3PPhysicsPipeline<float, 64, 128, 128>;
+  using Physics = avatar::N3PPhysicsDefault;
   const std::string dir = std::string(SPARSEBODY_BINARY_DIR) + "/n3p_physics_reference";
   std::ifstream probe(dir + "/n3p_policy_random.json");
   REQUIRE_MESSAGE(probe.good(), "run the parity test case first (it writes the random policy)");

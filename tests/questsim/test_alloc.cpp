@@ -35,8 +35,8 @@ static void check_no_alloc() {
 }
 
 TEST_CASE("QuestSim control ticks do not allocate (float and double simulation, f16 and q8 policy)") {
-  check_no_alloc<QuestSimPipeline<float>>();
-  check_no_alloc<QuestSimPipeline<double>>();
-  check_no_alloc<QuestSimPipeline<float, nn::f16>>();
-  check_no_alloc<QuestSimPipeline<float, nn::q8>>();
+  check_no_alloc<QuestSimDefault>();
+  check_no_alloc<QuestSimDouble>();
+  check_no_alloc<QuestSimF16>();
+  check_no_alloc<QuestSimQ8>();
 }

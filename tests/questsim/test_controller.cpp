@@ -11,8 +11,8 @@ using questsim_test::user_frame;
 using questsim_test::state_finite;
 
 namespace {
-using Ctl = QuestSimPipeline<float>;
-using CtlD = QuestSimPipeline<double>;
+using Ctl = QuestSimDefault;
+using CtlD = QuestSimDouble;
 
 template <class C>
 bool outputs_finite(const C& c) {

@@ -59,6 +59,8 @@
 #include "sparsebody/control/residual_wrench.hpp"
 #include "sparsebody/control/tracker_correction.hpp"
 #include "sparsebody/dynamics/simulator.hpp"
+#include "sparsebody/nn/half.hpp"
+#include "sparsebody/nn/int8.hpp"
 
 namespace sparsebody::avatar {
 
@@ -297,5 +299,13 @@ class N3PPhysicsPipeline {
   control::ResidualWrench residual_;
   control::ResidualStats stats_;
 };
+
+// The shipped configurations: the paper's network sizes (the default weights, examples/weights/n3p)
+// driving the default avatar in float, the networks' weights stored as W.
+template <typename W = float>
+using N3PPhysicsDefaultSizes = N3PPhysicsPipeline<float, 64, 128, 128, float, 24, 72, W>;
+using N3PPhysicsDefault = N3PPhysicsDefaultSizes<float>;
+using N3PPhysicsF16 = N3PPhysicsDefaultSizes<nn::f16>;  // half the weight bytes
+using N3PPhysicsQ8 = N3PPhysicsDefaultSizes<nn::q8>;    // int8 weights, approximate (nn/int8.hpp)
 
 }  // namespace sparsebody::avatar

@@ -46,9 +46,9 @@
 // allocate, throw or lock; the constructor allocates everything once.
 //
 // Use:
-//   auto w = avatar::QuestSimPipeline<>::load_weights("questsim_policy.json");   // kind "questsim_policy"
-//   auto c = avatar::QuestSimPipeline<>::from_standing_frame(w, standing_frame);    // nullptr if no height
-//   // or: avatar::QuestSimPipeline<> c(w, avatar::user_height_from_headset(standing_frame));
+//   auto w = avatar::QuestSimDefault::load_weights("questsim_policy.json");   // kind "questsim_policy"
+//   auto c = avatar::QuestSimDefault::from_standing_frame(w, standing_frame);    // nullptr if no height
+//   // or: avatar::QuestSimDefault c(w, avatar::user_height_from_headset(standing_frame));
 //   for (frame : frames) c->push(frame);           // any rate; runs one control step per 36 Hz tick
 //   c->simulator().data().R[i], .p[i]              // the avatar's body poses (world = stage space)
 //   c->tracked_time()                               // the user time those poses correspond to
@@ -65,6 +65,8 @@
 #include "sparsebody/control/fall_detector.hpp"
 #include "sparsebody/control/questsim_observation.hpp"
 #include "sparsebody/networks/policy_nets.hpp"
+#include "sparsebody/nn/half.hpp"
+#include "sparsebody/nn/int8.hpp"
 #include "sparsebody/nn/network.hpp"
 #include "sparsebody/trackers/resampler.hpp"
 #include "sparsebody/trackers/sanitizer.hpp"
@@ -281,5 +283,12 @@ class QuestSimPipeline {
   dynamics::StepStatus last_sim_status_ = dynamics::StepStatus::Ok;
   long long steps_ = 0, falls_ = 0, simulation_failures_ = 0, tracker_resets_ = 0, rejected_actions_ = 0;
 };
+
+// The shipped configurations on the default avatar: float simulation with float, f16 or int8
+// policy weights, and a double-precision simulation.
+using QuestSimDefault = QuestSimPipeline<>;
+using QuestSimF16 = QuestSimPipeline<float, nn::f16>;
+using QuestSimQ8 = QuestSimPipeline<float, nn::q8>;
+using QuestSimDouble = QuestSimPipeline<double>;
 
 }  // namespace sparsebody::avatar
