@@ -4,15 +4,17 @@
 // RBDL 3.3.1 (ForwardDynamics, InverseDynamics, CompositeRigidBodyAlgorithm) on the identical
 // 34-DoF tree. Each MuJoCo benchmark also reports `ratio` = MuJoCo time / ours timed back to back
 // (median of 5 chrono batches); the end of the run prints the same-run ratios peer / ours of the
-// benchmarks' medians (bench/ratio_report.hpp).
+// benchmarks' medians, real and CPU time (registered with bench/ratio_report.hpp's add_ratio).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <fstream>
+#include <map>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "sparsebody/character/avatar.hpp"
 #include "sparsebody/character/humanoid3d.hpp"
@@ -468,6 +470,37 @@ BENCHMARK(BM_RbdlRNEA_Humanoid34);
 BENCHMARK(BM_RbdlCRBA_Humanoid34);
 #endif
 
+// ratio_report.hpp's reporter that also keeps each benchmark's CPU time: on a shared, loaded
+// machine a benchmark's real time includes the time it was preempted, its CPU time does not.
+class RatioReporter : public sparsebody_bench::CollectingReporter {
+ public:
+  std::map<std::string, double> cpu_ns;  // name -> CPU time per iteration (ns), the median when repeated
+  void ReportRuns(const std::vector<Run>& runs) override {
+    for (const Run& r : runs)  // aggregates come after their repetitions: the median is written last
+      if (!r.error_occurred && (r.run_type != Run::RT_Aggregate || r.aggregate_name == "median"))
+        cpu_ns[r.run_name.str()] = r.GetAdjustedCPUTime() * 1e9 / benchmark::GetTimeUnitMultiplier(r.time_unit);
+    CollectingReporter::ReportRuns(runs);
+  }
+};
+
+int run_with_ratios(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  RatioReporter rep;
+  benchmark::RunSpecifiedBenchmarks(&rep);
+  std::printf("\nsparsebody dynamics: ratios measured in this run (time of first / time of second)\n");
+  std::printf("  %-58s %27s   %27s\n", "", "real time", "CPU time");
+  for (const sparsebody_bench::Ratio& r : sparsebody_bench::ratios()) {
+    auto a = rep.times_ns.find(r.numerator), b = rep.times_ns.find(r.denominator);
+    auto ca = rep.cpu_ns.find(r.numerator), cb = rep.cpu_ns.find(r.denominator);
+    if (a == rep.times_ns.end() || b == rep.times_ns.end() || ca == rep.cpu_ns.end() || cb == rep.cpu_ns.end()) continue;
+    std::printf("  %-58s %7.3f / %7.3f us = %5.2f   %7.3f / %7.3f us = %5.2f\n", r.label.c_str(), a->second / 1e3,
+                b->second / 1e3, a->second / b->second, ca->second / 1e3, cb->second / 1e3, ca->second / cb->second);
+  }
+  benchmark::Shutdown();
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -491,6 +524,6 @@ int main(int argc, char** argv) {
     add_ratio("Step " + m + ": MuJoCo mj_step / sparsebody", "BM_MjStep_" + m, "BM_Step_" + m);
   }
 #endif
-  return sparsebody_bench::run_with_ratios(argc, argv, "sparsebody dynamics");
+  return run_with_ratios(argc, argv);
 }
 

@@ -38,13 +38,13 @@ inline void aba_forward_pass(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, cons
 }
 
 // ---- pass 2, one function per joint type -----------------------------------------------------------
-// Each writes U_i, D_i^-1, u_i into d and, when body i has a parent, I^a_i and p^a_i. False when
+// (SPARSEBODY_INLINE: the per-joint functions are parts of one loop body, not calls.) Each writes U_i, D_i^-1, u_i into d and, when body i has a parent, I^a_i and p^a_i. False when
 // D_i is not positive (degenerate model or NaN).
 
 // Free root, S = 1_6: U = I^A, D = I^A + diag(k). Only its Cholesky factor is kept (pass 3 solves
 // with it); a free joint has no parent (Model validates this).
 template <class S, int MB, int MD>
-inline bool free_root_articulated(const Body<S>& b, int i, Data<S, MB, MD>& d) {
+SPARSEBODY_INLINE bool free_root_articulated(const Body<S>& b, int i, Data<S, MB, MD>& d) {
   Mat6<S> D = d.IA[i];
   for (int r = 0; r < 6; ++r) D(r, r) += d.implicit_diagonal(b.v_index + r);
   d.u[i].setZero();
@@ -54,7 +54,7 @@ inline bool free_root_articulated(const Body<S>& b, int i, Data<S, MB, MD>& d) {
 // Spherical, S = [1_3; 0]: U = I^A S is the first three columns of I^A (read in place, in pass 3
 // too: I^A_i is final once body i is reached), D the top-left 3x3 block of I^A plus diag(k).
 template <class S, int MB, int MD>
-inline bool spherical_articulated(const Body<S>& b, int i, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
+SPARSEBODY_INLINE bool spherical_articulated(const Body<S>& b, int i, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
                                   Mat6<S>& Ia, Vec6<S>& pa) {
   const Mat6<S>& IA = d.IA[i];
   const Vec6<S>& pA = d.pA[i];
@@ -88,7 +88,7 @@ inline bool spherical_articulated(const Body<S>& b, int i, Data<S, MB, MD>& d, c
 
 // Revolute, S = [axis; 0]: U = I^A S (stored, column 0 of d.U), D = S^T U + k, a scalar.
 template <class S, int MB, int MD>
-inline bool revolute_articulated(const Body<S>& b, int i, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
+SPARSEBODY_INLINE bool revolute_articulated(const Body<S>& b, int i, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
                                  Mat6<S>& Ia, Vec6<S>& pa) {
   const Mat6<S>& IA = d.IA[i];
   const Vec6<S>& pA = d.pA[i];
@@ -118,7 +118,7 @@ inline bool revolute_articulated(const Body<S>& b, int i, Data<S, MB, MD>& d, co
 
 // Fixed, S empty: I^a = I^A, p^a = p^A + I^A c.
 template <class S, int MB, int MD>
-inline void fixed_articulated(int i, const Data<S, MB, MD>& d, Mat6<S>& Ia, Vec6<S>& pa) {
+SPARSEBODY_INLINE void fixed_articulated(int i, const Data<S, MB, MD>& d, Mat6<S>& Ia, Vec6<S>& pa) {
   Ia = d.IA[i];
   pa = d.pA[i] + mul6v(d.IA[i], d.c[i]);
 }
@@ -160,7 +160,7 @@ inline bool aba_backward_pass(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, con
 
 // Free root: a = (I^A + diag(k))^-1 (tau - p^A + diag(k) a'), qdd = a - a'.
 template <class S, int MB, int MD>
-inline void free_root_acceleration(const Body<S>& b, int i, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
+SPARSEBODY_INLINE void free_root_acceleration(const Body<S>& b, int i, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
                                    Vec6<S>& ap, typename Model<S, MB, MD>::VecV& qdd) {
   const int k = b.v_index;
   Vec6<S> x;
@@ -172,7 +172,7 @@ inline void free_root_acceleration(const Body<S>& b, int i, Data<S, MB, MD>& d, 
 
 // Spherical: qdd = D^-1 (u - U^T a') with U the first three columns of I^A; a = a' + [qdd; 0].
 template <class S, int MB, int MD>
-inline void spherical_acceleration(const Body<S>& b, int i, const Data<S, MB, MD>& d, Vec6<S>& ap,
+SPARSEBODY_INLINE void spherical_acceleration(const Body<S>& b, int i, const Data<S, MB, MD>& d, Vec6<S>& ap,
                                    typename Model<S, MB, MD>::VecV& qdd) {
   const Mat6<S>& U = d.IA[i];
   const Mat3<S>& Dinv = d.Dinv[i];
@@ -189,7 +189,7 @@ inline void spherical_acceleration(const Body<S>& b, int i, const Data<S, MB, MD
 
 // Revolute: qdd = D^-1 (u - U^T a'); a = a' + [axis qdd; 0].
 template <class S, int MB, int MD>
-inline void revolute_acceleration(const Body<S>& b, int i, const Data<S, MB, MD>& d, Vec6<S>& ap,
+SPARSEBODY_INLINE void revolute_acceleration(const Body<S>& b, int i, const Data<S, MB, MD>& d, Vec6<S>& ap,
                                   typename Model<S, MB, MD>::VecV& qdd) {
   const Mat63<S>& U = d.U[i];
   const S x = d.Dinv[i](0, 0) * (d.u[i](0) - (U(0, 0) * ap(0) + U(1, 0) * ap(1) + U(2, 0) * ap(2) + U(3, 0) * ap(3) +

@@ -30,7 +30,7 @@ namespace detail {
 // expressed in body j; written at rows v_j, columns v_i and mirrored. The diagonal block is
 // symmetrised from its lower triangle, so H is exactly symmetric.
 template <int N, class S, class MatV>
-inline void crba_write_block(const Body<S>& bj, int vi, bool diagonal, const std::array<Vec6<S>, N>& F, MatV& H) {
+SPARSEBODY_INLINE void crba_write_block(const Body<S>& bj, int vi, bool diagonal, const std::array<Vec6<S>, N>& F, MatV& H) {
   const int vj = bj.v_index;
   auto put = [&](int r, int c, S x) {  // H(vj + r, vi + c)
     if (diagonal && r < c) return;

@@ -7,7 +7,7 @@ namespace sparsebody::dynamics {
 
 // Quaternion stored as (w, x, y, z) at q[k]; normalised on read so small drift never shears.
 template <class S, class VecQ>
-inline Quat<S> read_quat(const VecQ& q, int k) {
+SPARSEBODY_INLINE Quat<S> read_quat(const VecQ& q, int k) {
   Quat<S> r(q(k), q(k + 1), q(k + 2), q(k + 3));
   const S n2 = r.squaredNorm();
   if (n2 > S(0)) r.coeffs() /= std::sqrt(n2);
@@ -18,7 +18,7 @@ inline Quat<S> read_quat(const VecQ& q, int k) {
 // R_T R_J, so E = (R_T R_J)^T = R_J^T E_T; the product is skipped when X_T has no rotation (the
 // usual case). The free root ignores X_T (its coordinates are the pose itself).
 template <class S, int MB, int MD>
-inline void joint_transform(const Model<S, MB, MD>& m, int i, const typename Model<S, MB, MD>::VecQ& q, Transform<S>& X) {
+SPARSEBODY_INLINE void joint_transform(const Model<S, MB, MD>& m, int i, const typename Model<S, MB, MD>::VecQ& q, Transform<S>& X) {
   const Body<S>& b = m.bodies[i];
   const int k = b.q_index;
   X.r = b.XT.r;
@@ -42,7 +42,7 @@ inline Transform<S> joint_transform(const Model<S, MB, MD>& m, int i, const type
 
 // Motion subspace times joint velocity: v_J = S_i qd_i.
 template <class S, int MB, int MD>
-inline Vec6<S> joint_velocity(const Model<S, MB, MD>& m, int i, const typename Model<S, MB, MD>::VecV& qd) {
+SPARSEBODY_INLINE Vec6<S> joint_velocity(const Model<S, MB, MD>& m, int i, const typename Model<S, MB, MD>::VecV& qd) {
   const Body<S>& b = m.bodies[i];
   Vec6<S> vJ = Vec6<S>::Zero();
   switch (b.joint) {

@@ -12,6 +12,13 @@
 #else
 #define SPARSEBODY_UNROLL
 #endif
+// Small hot kernels are always inlined: left to the inliner, whether they are would depend on how
+// much other code the including translation unit has.
+#if defined(__GNUC__) || defined(__clang__)
+#define SPARSEBODY_INLINE inline __attribute__((always_inline))
+#else
+#define SPARSEBODY_INLINE inline
+#endif
 
 namespace sparsebody::dynamics {
 
@@ -41,7 +48,7 @@ struct Transform {
   // The three products below are written out by component: for 3-vectors Eigen's packet code
   // (AVX-512 here) costs more than it saves, and these run ~4 times per body per ABA call.
   // m_B = X m_A (motion vectors).
-  Vec6<S> apply(const Vec6<S>& m) const {
+  SPARSEBODY_INLINE Vec6<S> apply(const Vec6<S>& m) const {
     const S wx = m(0), wy = m(1), wz = m(2);
     const S ux = m(3) - (r.y() * wz - r.z() * wy);  // v - r x w
     const S uy = m(4) - (r.z() * wx - r.x() * wz);
@@ -56,7 +63,7 @@ struct Transform {
     return out;
   }
   // m_A = X^-1 m_B (motion vectors, child to parent).
-  Vec6<S> apply_inverse(const Vec6<S>& m) const {
+  SPARSEBODY_INLINE Vec6<S> apply_inverse(const Vec6<S>& m) const {
     Vec6<S> out;
     for (int k = 0; k < 3; ++k) {
       out(k) = E(0, k) * m(0) + E(1, k) * m(1) + E(2, k) * m(2);
@@ -68,7 +75,7 @@ struct Transform {
     return out;
   }
   // f_A = X^T f_B: a force on the child expressed in the parent (X^* inverse = X^T).
-  Vec6<S> apply_transpose_force(const Vec6<S>& f) const {
+  SPARSEBODY_INLINE Vec6<S> apply_transpose_force(const Vec6<S>& f) const {
     Vec6<S> out;
     for (int k = 0; k < 3; ++k) {
       out(k) = E(0, k) * f(0) + E(1, k) * f(1) + E(2, k) * f(2);
@@ -102,14 +109,14 @@ struct Transform {
 // Small dense products written as plain loops: for 3x3 blocks they compile to straight-line FMAs,
 // which beats Eigen's packet path at this size.
 template <class S>
-inline Mat3<S> mul33(const Mat3<S>& A, const Mat3<S>& B) {  // A B
+SPARSEBODY_INLINE Mat3<S> mul33(const Mat3<S>& A, const Mat3<S>& B) {  // A B
   Mat3<S> C;
   for (int j = 0; j < 3; ++j)
     for (int i = 0; i < 3; ++i) C(i, j) = A(i, 0) * B(0, j) + A(i, 1) * B(1, j) + A(i, 2) * B(2, j);
   return C;
 }
 template <class S>
-inline Mat3<S> mul_t33(const Mat3<S>& A, const Mat3<S>& B) {  // A^T B
+SPARSEBODY_INLINE Mat3<S> mul_t33(const Mat3<S>& A, const Mat3<S>& B) {  // A^T B
   Mat3<S> C;
   for (int j = 0; j < 3; ++j)
     for (int i = 0; i < 3; ++i) C(i, j) = A(0, i) * B(0, j) + A(1, i) * B(1, j) + A(2, i) * B(2, j);
@@ -117,7 +124,7 @@ inline Mat3<S> mul_t33(const Mat3<S>& A, const Mat3<S>& B) {  // A^T B
 }
 // 6x6 matrix times 6-vector, as plain loops (see mul33).
 template <class S>
-inline Vec6<S> mul6v(const Mat6<S>& A, const Vec6<S>& x) {
+SPARSEBODY_INLINE Vec6<S> mul6v(const Mat6<S>& A, const Vec6<S>& x) {
   Vec6<S> y;
   for (int i = 0; i < 6; ++i)
     y(i) = A(i, 0) * x(0) + A(i, 1) * x(1) + A(i, 2) * x(2) + A(i, 3) * x(3) + A(i, 4) * x(4) + A(i, 5) * x(5);
@@ -126,7 +133,7 @@ inline Vec6<S> mul6v(const Mat6<S>& A, const Vec6<S>& x) {
 
 // Inverse of a symmetric 3x3 matrix by cofactors (D_i of a spherical joint is SPD).
 template <class S>
-inline Mat3<S> inverse_sym3(const Mat3<S>& D) {
+SPARSEBODY_INLINE Mat3<S> inverse_sym3(const Mat3<S>& D) {
   const S a = D(0, 0), b = D(1, 0), c = D(2, 0), e = D(1, 1), f = D(2, 1), g = D(2, 2);
   const S A = e * g - f * f, B = c * f - b * g, C = b * f - c * e;
   const S inv = S(1) / (a * A + b * B + c * C);
@@ -173,7 +180,7 @@ inline void cholesky_solve6(const Mat6<S>& L, Vec6<S>& x) noexcept {
 
 // r^ M (cross product of r with each column of M).
 template <class S>
-inline Mat3<S> cross_mat(const Vec3<S>& r, const Mat3<S>& M) {
+SPARSEBODY_INLINE Mat3<S> cross_mat(const Vec3<S>& r, const Mat3<S>& M) {
   Mat3<S> C;
   for (int j = 0; j < 3; ++j) {
     C(0, j) = r.y() * M(2, j) - r.z() * M(1, j);
@@ -239,7 +246,7 @@ inline void add_transformed_inertia(const Transform<S>& X, const Mat6<S>& I, Mat
 
 // Spatial cross products: v x m (motion) and v x* f (force), Featherstone eq. 2.31-2.32.
 template <class S>
-inline Vec6<S> cross_motion(const Vec6<S>& v, const Vec6<S>& m) {
+SPARSEBODY_INLINE Vec6<S> cross_motion(const Vec6<S>& v, const Vec6<S>& m) {
   const Vec3<S> w = v.template head<3>(), vo = v.template tail<3>();
   const Vec3<S> mw = m.template head<3>(), mv = m.template tail<3>();
   Vec6<S> out;
@@ -248,7 +255,7 @@ inline Vec6<S> cross_motion(const Vec6<S>& v, const Vec6<S>& m) {
   return out;
 }
 template <class S>
-inline Vec6<S> cross_force(const Vec6<S>& v, const Vec6<S>& f) {
+SPARSEBODY_INLINE Vec6<S> cross_force(const Vec6<S>& v, const Vec6<S>& f) {
   const Vec3<S> w = v.template head<3>(), vo = v.template tail<3>();
   const Vec3<S> fn = f.template head<3>(), ff = f.template tail<3>();
   Vec6<S> out;
@@ -273,7 +280,7 @@ inline Mat6<S> rigid_inertia(S m, const Vec3<S>& c, const Mat3<S>& Ic) {
 // E = R(q)^T for a quaternion (w, x, y, z) of any non-zero norm (scaled by 2 / |q|^2, so a slightly
 // unnormalised state never shears the rotation and no sqrt is needed).
 template <class S>
-inline void quat_to_transposed_rotation(S w, S x, S y, S z, Mat3<S>& E) {
+SPARSEBODY_INLINE void quat_to_transposed_rotation(S w, S x, S y, S z, Mat3<S>& E) {
   const S s = S(2) / (w * w + x * x + y * y + z * z);
   const S xx = s * x * x, yy = s * y * y, zz = s * z * z;
   const S xy = s * x * y, xz = s * x * z, yz = s * y * z;
