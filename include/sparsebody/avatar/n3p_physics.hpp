@@ -49,6 +49,7 @@
 #include "sparsebody/avatar/n3p_direct.hpp"
 #include "sparsebody/avatar/n3p_physics_config.hpp"
 #include "sparsebody/avatar/n3p_reference_history.hpp"
+#include "sparsebody/avatar/pipeline_front_end.hpp"
 #include "sparsebody/character/avatar.hpp"
 #include "sparsebody/control/fall_detector.hpp"
 #include "sparsebody/control/floor_penetration.hpp"
@@ -67,7 +68,7 @@ namespace sparsebody::avatar {
 // W: stored weight type of the networks (T, nn::f16 or nn::q8: see nn/int8.hpp).
 template <typename T = float, int HSig = 64, int HLo = 128, int HUp = 128, typename S = float, int MB = 24, int MD = 72,
           typename W = T>
-class N3PPhysicsPipeline {
+class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, HLo, HUp, S, MB, MD, W>> {
  public:
   using Direct = N3PPipeline<T, HSig, HLo, HUp, W>;
   using Weights = typename Direct::Weights;
@@ -97,16 +98,13 @@ class N3PPhysicsPipeline {
         controller_(model_, cfg.controller),
         correction_(model_, cfg.correction),
         recovery_(model_, retarget_.body_of(0), cfg.fall, cfg.controller.ground_resets),
-        resampler_(direct_.meta().frame_rate),
         history_(model_.neutral_configuration()) {
     if (policy) control_ = std::make_unique<ControlPredictor>(w, std::move(policy));
     sim_.options.contact.max_passes = cfg.contact_passes;
     q_tmp_ = model_.neutral_configuration();
     tau_.setZero(model_.nv);
-    pose_.resize(direct_.skeleton().size());
-    last_pose_ = pose_;
-    world_.resize(direct_.skeleton().size());
-    last_world_ = world_;
+    // the front end's resampler gives the ticks; direct mode sanitises them (its step)
+    this->start_front_end(direct_.meta().frame_rate, cfg.direct.sanitizer, direct_.skeleton().size());
     reset();
   }
 
@@ -115,13 +113,10 @@ class N3PPhysicsPipeline {
   void set_calibration(const features::n3p::N3PCalibration& c) noexcept { direct_.set_calibration(c); }
 
   // --- running --------------------------------------------------------------------------------
-  int push(const trackers::TrackerFrame& f) noexcept {
-    return resampler_.push(f, [this](const trackers::TrackerFrame& tick, bool gap) { step(tick, gap); });
-  }
-
   // One 30 Hz frame (the caller resampled): the direct step, 4 simulation steps, maybe a control step.
   void step(const trackers::TrackerFrame& f, bool gap = false) noexcept {
     direct_.step(f, gap);
+    ++this->frames_;
     if (gap) restart_ = true;
     if (!direct_.has_output()) return;
     // Reference of this frame.
@@ -140,21 +135,18 @@ class N3PPhysicsPipeline {
 
   void reset() noexcept {
     direct_.reset();
-    resampler_.reset();
+    this->reset_front_end();
     controller_.reset();
     recovery_.reset();
     if (control_) control_->reset();
     started_ = restart_ = false;
-    valid_output_ = false;
     residual_ = {};
     stats_ = {};
   }
 
   // --- results --------------------------------------------------------------------------------
-  // The simulated pose on the standard skeleton (metres), kDelayFrames behind the input.
-  const pose::BodyPose& pose() const noexcept { return pose_; }
-  const pose::WorldPose& world() const noexcept { return world_; }
-  bool has_output() const noexcept { return valid_output_; }
+  // pose(), world(), has_output() (PipelineFrontEnd): the simulated pose on the standard skeleton
+  // (metres), kDelayFrames behind the input.
   // Input frame (counted from the last physics start) and time stamp the output reproduces.
   long long output_frame() const noexcept { return sim_frame_; }
   double output_time() const noexcept { return out_time_; }
@@ -260,19 +252,9 @@ class N3PPhysicsPipeline {
   }
 
   void output() noexcept {
-    retarget_.to_pose(model_, sim_.q(), pose_);
-    pose::forward_kinematics(direct_.skeleton(), pose_, world_);
-    bool ok = pose_.root_position.allFinite();
-    for (std::size_t j = 0; j < pose_.local.size(); ++j) ok &= pose_.local[j].coeffs().allFinite() && world_.position[j].allFinite();
-    if (!ok) {
-      pose_ = last_pose_;
-      world_ = last_world_;
-      restart_ = true;
-      return;
-    }
-    last_pose_ = pose_;
-    last_world_ = world_;
-    valid_output_ = true;
+    retarget_.to_pose(model_, sim_.q(), this->out_.pose());
+    pose::forward_kinematics(direct_.skeleton(), this->out_.pose(), this->out_.world());
+    if (!this->out_.commit()) restart_ = true;  // the last finite pose is kept; the physics restarts
   }
 
   N3PPhysicsConfig cfg_;
@@ -287,15 +269,12 @@ class N3PPhysicsPipeline {
   control::ModelBasedController<S, MB, MD> controller_;
   control::TrackerCorrection<S, MB, MD> correction_;
   control::N3PRecovery<S, MB, MD> recovery_;
-  trackers::Resampler resampler_;
   History history_;
   VecQ q_tmp_;
   VecV tau_;
-  pose::BodyPose pose_, last_pose_;
-  pose::WorldPose world_, last_world_;
   long long sim_frame_ = 0;
   double out_time_ = 0;
-  bool started_ = false, restart_ = false, valid_output_ = false;
+  bool started_ = false, restart_ = false;
   control::ResidualWrench residual_;
   control::ResidualStats stats_;
 };

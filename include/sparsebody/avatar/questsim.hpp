@@ -64,12 +64,12 @@
 #include "sparsebody/character/avatar.hpp"
 #include "sparsebody/control/fall_detector.hpp"
 #include "sparsebody/control/questsim_observation.hpp"
+#include "sparsebody/features/heading_frame.hpp"
 #include "sparsebody/networks/policy_nets.hpp"
 #include "sparsebody/nn/half.hpp"
 #include "sparsebody/nn/int8.hpp"
 #include "sparsebody/nn/network.hpp"
-#include "sparsebody/trackers/resampler.hpp"
-#include "sparsebody/trackers/sanitizer.hpp"
+#include "sparsebody/trackers/tracker_stream.hpp"
 
 namespace sparsebody::avatar {
 
@@ -112,7 +112,7 @@ class QuestSimPipeline {
   // A custom model (already at the user's scale; its joint damping is used as given).
   QuestSimPipeline(std::shared_ptr<const Weights> weights, const Model& model, double user_height, QuestSimConfig cfg)
       : cfg_(cfg), height_(S(user_height)), sim_(std::make_unique<Sim>(model)), obs_builder_(model),
-        policy_(std::move(weights)), resampler_(cfg.control_rate, cfg.max_gap), sanitizer_(cfg.sanitizer) {
+        policy_(std::move(weights)), stream_(cfg.control_rate, cfg.sanitizer, cfg.max_gap) {
     if (!(cfg.substeps >= 1) || !(cfg.control_rate > 0))
       throw std::invalid_argument("QuestSimPipeline: substeps >= 1 and control_rate > 0 required");
     sim_->options.mode = dynamics::ControlMode::Torque;
@@ -134,12 +134,19 @@ class QuestSimPipeline {
   // Any-rate input: resampled to the control rate; one tick (and control step) per 36 Hz sample.
   // Returns the number of ticks run.
   int push(const trackers::TrackerFrame& f) noexcept {
-    return resampler_.push(f, [this](const trackers::TrackerFrame& t, bool reset) { tick(t, reset); });
+    return stream_.push(f, [this](const trackers::TrackerFrame& t, bool reset) { tick(t, reset); });
+  }
+
+  // Back to the constructed state: no input seen, the next frame stands the character under the
+  // headset (the counters of falls, resets and failures are kept: they describe the session).
+  void reset() noexcept {
+    stream_.reset();
+    started_ = false;
   }
 
   // One control tick from a frame already at the control rate (time = this tick's user time).
   QuestSimEvent tick(const trackers::TrackerFrame& f, bool restart = false) noexcept {
-    const trackers::SanitizedFrame& sf = sanitizer_.process(f, control_period());
+    const trackers::SanitizedFrame& sf = stream_.sanitize(f);  // dt = the control period
     if (!sf.usable) return last_event_ = QuestSimEvent::Waiting;
     control::QuestSimSensorFrame<S> frame;
     for (int dev = 0; dev < 3; ++dev) {
@@ -222,7 +229,7 @@ class QuestSimPipeline {
   void stand_under_headset(const control::QuestSimSensorFrame<S>& frame) noexcept {
     typename Sim::VecQ q = standing_q_;
     const dynamics::Vec3<S> fwd = -frame[0].rotation.col(2);
-    const S theta = (std::abs(fwd.x()) + std::abs(fwd.z()) > S(1e-6)) ? std::atan2(fwd.x(), fwd.z()) : S(0);
+    const S theta = features::heading_angle(fwd, S(1e-6));
     q(0) = frame[0].position.x();
     q(2) = frame[0].position.z();
     q(3) = std::cos(theta / 2); q(4) = S(0); q(5) = std::sin(theta / 2); q(6) = S(0);  // R_y(theta)
@@ -269,8 +276,7 @@ class QuestSimPipeline {
   std::unique_ptr<Sim> sim_;
   Builder obs_builder_;
   nn::Network<Net> policy_;
-  trackers::Resampler resampler_;
-  trackers::TrackerSanitizer sanitizer_;
+  trackers::TrackerStream stream_;  // the pipelines' shared front end: resampler + sanitizer
   Window window_{};
   std::array<double, NF + 1> times_{};
   alignas(64) std::array<float, kObservationSize> obs_{};
