@@ -47,7 +47,20 @@ class PoseOutput {
 
   // No output until the next commit (e.g. no usable input this frame); the poses are kept.
   void invalidate() noexcept { valid_ = false; }
-  void reset() noexcept { valid_ = false; }
+  // Back to the state resize() left: no output, identity rotations, zero positions (a pipeline
+  // that reads its previous frame, e.g. IK seeded from the last arm pose, then restarts exactly as
+  // a new instance would: tests/determinism). assign() on the sized vectors does not allocate.
+  void reset() noexcept {
+    valid_ = false;
+    for (BodyPose* p : {&pose_, &last_pose_}) {
+      p->root_position.setZero();
+      p->local.assign(p->local.size(), Eigen::Quaterniond::Identity());
+    }
+    for (WorldPose* w : {&world_, &last_world_}) {
+      w->position.assign(w->position.size(), Eigen::Vector3d::Zero());
+      w->rotation.assign(w->rotation.size(), Eigen::Quaterniond::Identity());
+    }
+  }
 
  private:
   BodyPose pose_, last_pose_;

@@ -17,7 +17,17 @@ struct LoBSTrMeta {
   double standing_hips_height = 0.9, standing_head_height = 1.38;
   double toe_height = 0.042;    // standing height of the toe-base joint above the floor
 
+  // A meta value of the wrong JSON type (a string where a number belongs) is a LoadError too.
   static LoBSTrMeta from(const io::ModelInfo& info) {
+    try {
+      return parse(info);
+    } catch (const nlohmann::json::exception& e) {
+      throw LoadError(info.source, std::string("meta: unexpected value: ") + excerpt(e.what(), 200));
+    }
+  }
+
+ private:
+  static LoBSTrMeta parse(const io::ModelInfo& info) {
     const std::string& src = info.source;
     LoBSTrMeta m;
     const auto& j = info.meta;

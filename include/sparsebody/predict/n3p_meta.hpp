@@ -24,7 +24,17 @@ struct N3PMeta {
   double frame_rate = 30;
   double standing_hips_height = 0.908, standing_head_height = 1.378;
 
+  // A meta value of the wrong JSON type (a string where a number belongs) is a LoadError too.
   static N3PMeta from(const io::ModelInfo& info) {
+    try {
+      return parse(info);
+    } catch (const nlohmann::json::exception& e) {
+      throw LoadError(info.source, std::string("meta: unexpected value: ") + excerpt(e.what(), 200));
+    }
+  }
+
+ private:
+  static N3PMeta parse(const io::ModelInfo& info) {
     const std::string& src = info.source;
     const auto& j = info.meta;
     N3PMeta m;
