@@ -162,10 +162,13 @@ int run_neural3points(Options& o, Input& in) {
 // The LoBSTr build for the weights file's sizes (meta.hidden, meta.latent) and --storage.
 int run_lobstr_weights(Options& o, Input& in) {
   if (o.weights.empty()) o.weights = SPARSEBODY_DEFAULT_WEIGHTS;
-  std::ifstream probe(o.weights);
-  if (!probe) usage(("cannot open weights " + o.weights).c_str());
-  const auto doc = nlohmann::json::parse(probe);
-  const int hidden = doc.at("meta").value("hidden", 256), latent = doc.at("meta").value("latent", 128);
+  // The sizes from the file's meta; a missing or malformed file is a LoadError naming it (exit 2).
+  const io::WeightsDocument doc = io::read_weights_file(o.weights);
+  const auto& meta = doc.info.meta;
+  auto size_of = [&](const char* key, int def) {
+    return meta.contains(key) && meta[key].is_number_integer() ? meta[key].get<int>() : def;
+  };
+  const int hidden = size_of("hidden", 256), latent = size_of("latent", 128);
   const bool f16 = o.storage == "f16", q8 = o.storage == "q8";
   if (hidden == 256 && latent == 128)
     return f16  ? run_lobstr<avatar::LoBSTrCompactF16>(o, in)
@@ -191,7 +194,10 @@ int main(int argc, char** argv) {
     const std::optional<Model> model = choose_model(o, in);
     if (!model) return 1;
     return *model == Model::N3P ? run_neural3points(o, in) : run_lobstr_weights(o, in);
-  } catch (const std::exception& e) {  // LoadError (a weights or input file) included
+  } catch (const LoadError& e) {  // a weights or input file that is missing or malformed
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;
   }
