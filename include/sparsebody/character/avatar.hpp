@@ -49,14 +49,14 @@ class AvatarBuilder {
   using Segment = de_leva::Segment;
 
   explicit AvatarBuilder(const AvatarOptions& o)
-      : o_(o), s_(o.height / (de_leva::kStatureMm / 1000.0)), M_(o.mass), H_(S(o.height)) {
+      : o_(o), s_(o.height / (de_leva::kStatureMm / 1000.0)), mass_(o.mass), height_(S(o.height)) {
     namespace dl = de_leva;
     // Landmark heights (world y) in the reference pose, from the top of the head down.
-    const S y_c7 = H_ - length(dl::kHead);
+    const S y_c7 = height_ - length(dl::kHead);
     const S y_xyph = y_c7 - length(dl::kUpperTrunk);
     const S y_omph = y_xyph - length(dl::kMiddleTrunk);
     y_midh_ = y_omph - length(dl::kLowerTrunk);
-    ankle_h_ = S(0.04) * H_;
+    ankle_h_ = S(0.04) * height_;
     const double leg_k = double(y_midh_ - ankle_h_) / double(length(dl::kThigh) + length(dl::kShank));
     l_thigh_ = S(leg_k) * length(dl::kThigh);
     l_shank_ = S(leg_k) * length(dl::kShank);
@@ -117,28 +117,28 @@ class AvatarBuilder {
     {  // Hips = de Leva lower trunk (omphalion..mid-hip); origin at mid-hip.
       const S l = length(dl::kLowerTrunk);
       Body b = body(-1, o_.fixed_root ? JointType::Fixed : JointType::Free, V(0, y_midh_, 0),
-                    dl::kLowerTrunk.mass_fraction * M_, V(0, S(1 - dl::kLowerTrunk.com) * l, 0),
-                    inertia(dl::kLowerTrunk.mass_fraction * M_, dl::kLowerTrunk, 1, l));
+                    dl::kLowerTrunk.mass_fraction * mass_, V(0, S(1 - dl::kLowerTrunk.com) * l, 0),
+                    inertia(dl::kLowerTrunk.mass_fraction * mass_, dl::kLowerTrunk, 1, l));
       capsule(b, V(-scaled(0.07), S(0.35) * l, 0), V(scaled(0.07), S(0.35) * l, 0), scaled(0.09));
       m_.add_body("Hips", b);
     }
     {  // Spine = middle trunk (xiphoid..omphalion), origin at omphalion
       const S l = length(dl::kMiddleTrunk);
-      Body b = body(0, JointType::Spherical, V(0, length(dl::kLowerTrunk), 0), dl::kMiddleTrunk.mass_fraction * M_,
-                    V(0, S(1 - dl::kMiddleTrunk.com) * l, 0), inertia(dl::kMiddleTrunk.mass_fraction * M_, dl::kMiddleTrunk, 1, l));
+      Body b = body(0, JointType::Spherical, V(0, length(dl::kLowerTrunk), 0), dl::kMiddleTrunk.mass_fraction * mass_,
+                    V(0, S(1 - dl::kMiddleTrunk.com) * l, 0), inertia(dl::kMiddleTrunk.mass_fraction * mass_, dl::kMiddleTrunk, 1, l));
       sphere(b, V(0, S(0.5) * l, 0), scaled(0.1));
       m_.add_body("Spine", b);
     }
     int chest;
     {  // Chest = upper trunk minus the two shoulders, origin at xiphoid
-      const double chest_mass = dl::kUpperTrunk.mass_fraction * M_ * 0.8;
+      const double chest_mass = dl::kUpperTrunk.mass_fraction * mass_ * 0.8;
       const S l = length(dl::kUpperTrunk);
       Body b = body(1, JointType::Spherical, V(0, length(dl::kMiddleTrunk), 0), chest_mass,
                     V(0, S(1 - dl::kUpperTrunk.com) * l, 0), inertia(chest_mass, dl::kUpperTrunk, 1, l));
       capsule(b, V(-scaled(0.08), S(0.5) * l, 0), V(scaled(0.08), S(0.5) * l, 0), scaled(0.1));
       chest = m_.add_body("Chest", b);
     }
-    const double head_seg = dl::kHead.mass_fraction * M_;
+    const double head_seg = dl::kHead.mass_fraction * mass_;
     const S l_head = length(dl::kHead), l_neck = S(0.35) * l_head;
     {  // Neck: lower 35 % of the head segment length, 15 % of its mass
       const double mass = 0.15 * head_seg;
@@ -163,13 +163,13 @@ class AvatarBuilder {
     const S sx = side == 0 ? S(1) : S(-1);
     const std::string suf = side == 0 ? "_L" : "_R";
     const S sh_x = scaled(0.03), arm_x = scaled(0.175), sh_drop = scaled(0.035);
-    const double sh_mass = dl::kUpperTrunk.mass_fraction * M_ * 0.1;
+    const double sh_mass = dl::kUpperTrunk.mass_fraction * mass_ * 0.1;
     Body sh = body(chest, JointType::Spherical, V(sx * sh_x, length(dl::kUpperTrunk) - sh_drop, 0), sh_mass,
                    V(sx * S(0.5) * (arm_x - sh_x), 0, 0),
                    inertia(sh_mass, Segment{0, 0, 0, 0.3, 0.3, 0.15}, 0, double(arm_x - sh_x)));
     const int ish = m_.add_body("Shoulder" + suf, sh);
     const S lu = length(dl::kUpperArm), lf = length(dl::kForearm), lh = length(dl::kHand);
-    const double mu = dl::kUpperArm.mass_fraction * M_, mf = dl::kForearm.mass_fraction * M_, mh = dl::kHand.mass_fraction * M_;
+    const double mu = dl::kUpperArm.mass_fraction * mass_, mf = dl::kForearm.mass_fraction * mass_, mh = dl::kHand.mass_fraction * mass_;
     Body ua = body(ish, JointType::Spherical, V(sx * (arm_x - sh_x), 0, 0), mu, V(sx * S(dl::kUpperArm.com) * lu, 0, 0),
                    inertia(mu, dl::kUpperArm, 0, double(lu)));
     capsule(ua, V(sx * S(0.1) * lu, 0, 0), V(sx * S(0.9) * lu, 0, 0), scaled(0.045));
@@ -195,8 +195,8 @@ class AvatarBuilder {
     const S lfoot = length(dl::kFoot);
     const S heel_z = S(-0.22) * lfoot, mtp_z = S(0.51) * lfoot, toe_z = S(0.78) * lfoot;
     const S foot_hw = scaled(0.045), toe_h = scaled(0.025);
-    const double mt = dl::kThigh.mass_fraction * M_, ms = dl::kShank.mass_fraction * M_;
-    const double mfoot = dl::kFoot.mass_fraction * M_ * 0.8, mtoe = dl::kFoot.mass_fraction * M_ * 0.2;
+    const double mt = dl::kThigh.mass_fraction * mass_, ms = dl::kShank.mass_fraction * mass_;
+    const double mfoot = dl::kFoot.mass_fraction * mass_ * 0.8, mtoe = dl::kFoot.mass_fraction * mass_ * 0.2;
     Body th = body(0, JointType::Spherical, V(sx * hip_x, 0, 0), mt, V(0, -S(dl::kThigh.com) * l_thigh_, 0),
                    inertia(mt, dl::kThigh, 1, double(l_thigh_)));
     capsule(th, V(0, S(-0.15) * l_thigh_, 0), V(0, S(-0.9) * l_thigh_, 0), scaled(0.065));
@@ -219,8 +219,8 @@ class AvatarBuilder {
 
   AvatarOptions o_;
   double s_;   // length scale, height / de Leva's reference stature
-  double M_;   // total mass (kg)
-  S H_;        // height (m)
+  double mass_;   // total mass (kg)
+  S height_;        // height (m)
   // Mid-hip height in the reference pose, ankle height, leg lengths rescaled to fit between them.
   S y_midh_, ankle_h_, l_thigh_, l_shank_;
   dynamics::Model<S, MB, MD> m_;

@@ -91,7 +91,7 @@ inline S box_distance(const StaticBox<S>& b, const Vec3<S>& x, Vec3<S>& normal) 
 // prev/nprev (optional): the previous step's contacts after their solve. A contact between the same
 // point and obstacle that was sliding starts sliding with the damper it converged to (warm start):
 // a foot that keeps slipping under steady torques then needs one solve instead of the 3 passes that
-// discover the slip and refine c_s (QuestSim substep from rest: 30.6 -> 12.9 us).
+// discover the slip and refine c_s.
 template <class S, int MB, int MD, int MaxBoxes, std::size_t MaxContacts>
 inline int detect_contacts(const Model<S, MB, MD>& m, const Data<S, MB, MD>& d, const Environment<S, MaxBoxes>& env,
                           const ContactParams<S>& par, std::array<Contact<S>, MaxContacts>& out, int& overflow,

@@ -17,7 +17,7 @@ constexpr int joint_nq(JointType t) {
 constexpr int joint_nv(JointType t) {
   return t == JointType::Free ? 6 : t == JointType::Spherical ? 3 : t == JointType::Revolute ? 1 : 0;
 }
-inline const char* jointName(JointType t) {
+inline const char* joint_name(JointType t) {
   switch (t) {
     case JointType::Free: return "free";
     case JointType::Spherical: return "spherical";

@@ -280,7 +280,7 @@ std::string model_to_json(const Model<S, MB, MD>& m, int indent = 1) {
     json o;
     o["name"] = m.names[i];
     o["parent"] = b.parent < 0 ? json(nullptr) : json(m.names[b.parent]);
-    o["joint"] = jointName(b.joint);
+    o["joint"] = joint_name(b.joint);
     if (b.joint == JointType::Revolute) o["axis"] = v3(b.axis);
     o["pos"] = v3(b.pos);
     o["quat"] = q4(b.rot);
