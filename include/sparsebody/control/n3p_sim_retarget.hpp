@@ -63,7 +63,7 @@ class N3PSimRetarget {
     }
     for (int j = 1; j < s.size(); ++j)
       if (m.bodies[body_[j]].parent != body_[s.parents[j]]) throw LoadError("n3p_sim_retarget", "tree differs at " + s.names[j]);
-    if (m.bodies[body_[0]].joint != dynamics::JointType::Free || s.parents[0] >= 0)
+    if (body_[0] != m.root_body() || s.parents[0] >= 0)
       throw LoadError("n3p_sim_retarget", "the skeleton root must map to the model's free joint");
     n_ = s.size();
     // U_j: the avatar's world rotation in the standing pose (bone directions of N).
