@@ -4,7 +4,8 @@
 //   TrackerFrame (any rate) -> Resampler (model rate) -> TrackerSanitizer (bad input)
 //     -> Calibration (offsets, height scale) -> LoBSTrFeatures (37) -> LoBSTrNet (GRU)
 //     -> lower body: 8 local rotations (6D) under the hips placed by the pelvis tracker
-//     -> contacts -> FootLock + leg IK (§3.4.1);  upper body: spine/head aim + two-bone arm IK.
+//     -> contacts -> FootLock + leg IK (§3.4.1);  upper body: spine/head aim + two-bone arm IK
+//        (avatar/lobstr_upper_body.hpp).
 //
 // Run modes (Config::mode):
 //   Streaming  one GRU step per frame with the hidden state carried over (cost: 1 step/frame).
@@ -18,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "sparsebody/avatar/lobstr_upper_body.hpp"
 #include "sparsebody/avatar/pipeline_front_end.hpp"
 #include "sparsebody/features/calibration.hpp"
 #include "sparsebody/features/lobstr_features.hpp"
@@ -68,7 +70,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     this->start_front_end(meta_.frame_rate, cfg.sanitizer, s.size());
     window_ = cfg_.window > 0 ? cfg_.window : static_cast<int>(meta_.frame_rate + 0.5);
     if (cfg_.mode == RunMode::Window) ring_.assign(static_cast<std::size_t>(window_) * kFeatures, T(0));
-    find_upper_body();
+    upper_ = LoBSTrUpperBody(s, map_);
     reset();
   }
 
@@ -93,7 +95,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     const T* y = run_network();
     for (int i = 0; i < Net::out_size; ++i) y_[i] = y[i];
     decode_lower_body();
-    if (cfg_.upper_body_ik) solve_upper_body();
+    if (cfg_.upper_body_ik) upper_.solve(meta_.skeleton, cal_, out_.pose(), out_.world());
     pose::forward_kinematics(meta_.skeleton, out_.pose(), out_.world());
     contacts_and_legs();
     // The last-good guard, new with the shared front end (LoBSTr had none): a frame that would not
@@ -158,87 +160,6 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     for (int i = 0; i < 8; ++i) out_.pose().local[meta_.lower[i]] = Eigen::Quaterniond(pose::from6d(y_ + 6 * i));
   }
 
-  void find_upper_body() {
-    const pose::Skeleton& s = meta_.skeleton;
-    // spine chain: joints from the hips' spine child up to the head
-    const int head = map_[pose::Role::Head];
-    int j = head;
-    spine_n_ = 0;
-    while (j > 0 && spine_n_ < 8) { spine_rev_[spine_n_++] = j; j = s.parents[j]; }
-    // spine_rev_ = head, neck, chest, ..., first spine joint (child of the hips)
-    for (int side = 0; side < 2; ++side) {
-      const int hand = map_[side == 0 ? pose::Role::HandL : pose::Role::HandR];
-      arm_[side][2] = hand;
-      arm_[side][1] = s.parents[hand];
-      arm_[side][0] = s.parents[arm_[side][1]];
-      arm_[side][3] = s.parents[arm_[side][0]];  // clavicle (or the chest for 3-joint arms)
-    }
-    chest_ = s.parents[arm_[0][3]];
-    if (arm_[0][3] == chest_ || chest_ < 0) chest_ = arm_[0][3];
-    lateral_local_ = s.offsets[arm_[0][3]] - s.offsets[arm_[1][3]];
-    if (lateral_local_.norm() < 1e-6) lateral_local_ = Eigen::Vector3d::UnitZ();
-  }
-
-  // Bone direction of joint j in its own frame (towards its first child; a leaf continues its parent's bone).
-  Eigen::Vector3d bone_local(int j) const noexcept {
-    const pose::Skeleton& s = meta_.skeleton;
-    const int c = s.first_child(j);
-    const Eigen::Vector3d d = c >= 0 ? s.offsets[c] : s.offsets[j];
-    return d.norm() > 1e-9 ? Eigen::Vector3d(d.normalized()) : Eigen::Vector3d::UnitX();
-  }
-
-  // Upper body from the trackers: the spine chain straight from its base towards the head tracker
-  // (twist from the body's left axis), the head from the headset's orientation, the clavicles
-  // outwards, and two-bone IK from the shoulders to the hand trackers with elbows down and back.
-  void solve_upper_body() noexcept {
-    const pose::Skeleton& s = meta_.skeleton;
-    const Eigen::Matrix3d H = cal_[0].orientation.toRotationMatrix();
-    const Eigen::Matrix3d Wh = out_.pose().local[0].toRotationMatrix();
-    const Eigen::Vector3d left_body = cal_[3].orientation.toRotationMatrix().col(0);
-    const Eigen::Vector3d up_body = cal_[3].orientation.toRotationMatrix().col(1);
-    const int base = spine_rev_[spine_n_ - 1];
-    const Eigen::Vector3d base_pos = out_.pose().root_position + Wh * s.offsets[base];
-    Eigen::Vector3d dir = cal_[0].position - base_pos;
-    if (dir.norm() < 1e-6) dir = up_body;
-    dir.normalize();
-    // world rotations, parents first
-    Eigen::Quaterniond parent_w(Wh);
-    for (int i = spine_n_ - 1; i >= 0; --i) {
-      const int j = spine_rev_[i];
-      Eigen::Quaterniond w;
-      if (i == 0) {  // head: its bone axis along the headset's up, lateral along its left
-        w = pose::aim(bone_local(j), lateral_local_, H.col(1), H.col(0));
-      } else {
-        w = pose::aim(bone_local(j), lateral_local_, dir, left_body);
-      }
-      out_.pose().local[j] = (parent_w.conjugate() * w).normalized();
-      parent_w = w;
-    }
-    pose::forward_kinematics(s, out_.pose(), out_.world());
-    const Eigen::Vector3d fwd_body = cal_[3].orientation.toRotationMatrix().col(2);
-    for (int side = 0; side < 2; ++side) {  // clavicles outwards (independent of each other)
-      const int clav = arm_[side][3];
-      if (clav == chest_) continue;
-      const double sgn = side == 0 ? 1.0 : -1.0;
-      const Eigen::Quaterniond w = pose::aim(bone_local(clav), Eigen::Vector3d::UnitY(), sgn * left_body, fwd_body);
-      out_.pose().local[clav] = (out_.world().rotation[s.parents[clav]].conjugate() * w).normalized();
-    }
-    pose::forward_kinematics(s, out_.pose(), out_.world());
-    for (int side = 0; side < 2; ++side) {
-      const int clav = arm_[side][3], up = arm_[side][0], lo = arm_[side][1], hand = arm_[side][2];
-      const double sgn = side == 0 ? 1.0 : -1.0;
-      const pose::WorldPose& w = out_.world();
-      const Eigen::Vector3d pole = -up_body - 0.5 * fwd_body + 0.2 * sgn * left_body;
-      const auto ik = pose::limb_to(w.position[up], w.position[lo], w.position[hand], w.rotation[up], w.rotation[lo],
-                                    cal_[1 + side].position, pole,
-                                    pose::LimbRotation::aimed(bone_local(up), bone_local(lo), Eigen::Vector3d::UnitY(), fwd_body));
-      const Eigen::Matrix3d Ht = cal_[1 + side].orientation.toRotationMatrix();
-      const Eigen::Quaterniond Wd = pose::aim(bone_local(hand), Eigen::Vector3d::UnitY(), sgn * Ht.col(0), Ht.col(1));
-      const int arm[3] = {up, lo, hand};
-      pose::set_limb_locals(out_.pose(), arm, &w.rotation[clav], ik.upper, ik.lower, Wd, true);
-    }
-  }
-
   // Contacts from the network, foot locks, and leg IK keeping each foot's world orientation.
   void contacts_and_legs() noexcept {
     if (!cfg_.contact_ik) return;
@@ -278,10 +199,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   pose::FootLock lock_[2];
   std::vector<T> ring_;
   int window_ = 30, filled_ = 0, head_ = 0;
-  int spine_rev_[8] = {}, spine_n_ = 0;
-  int arm_[2][4] = {};
-  int chest_ = 0;
-  Eigen::Vector3d lateral_local_ = Eigen::Vector3d::UnitZ();
+  LoBSTrUpperBody upper_;
 };
 
 // The shipped configurations, by name: compact (H = 256, latent 128: examples/weights/
