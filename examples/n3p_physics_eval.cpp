@@ -31,6 +31,7 @@
 #include <nlohmann/json.hpp>
 
 #include "sparsebody/avatar/n3p_physics.hpp"
+#include "sparsebody/recordings/n3p_validation_dump.hpp"
 #include "sparsebody/pose/rotation6d.hpp"
 
 using namespace sparsebody;
@@ -138,22 +139,6 @@ Physics::Weights load_weights(const std::string& prefix) {
   }
 }
 
-trackers::TrackerFrame frame_of(const nlohmann::json& c, int t) {
-  trackers::TrackerFrame f;
-  f.time = t / 30.0;
-  for (int k = 0; k < 3; ++k) {
-    const auto& p3 = c["p"][t];
-    const auto& q = c["q6"][t];
-    double d6[6];  // forward (Z) then up (Y) axis, the pipeline's 6D layout
-    for (int i = 0; i < 6; ++i) d6[i] = q[6 * k + i];
-    const Eigen::Matrix3d R = pose::from6d(d6);
-    f.pose[k].position = trackers::to_xr(Eigen::Vector3d(p3[3 * k], p3[3 * k + 1], p3[3 * k + 2]));
-    f.pose[k].orientation = trackers::to_xr(Eigen::Quaterniond(R));
-    f.valid[k] = true;
-  }
-  return f;
-}
-
 // The foot and toe joints (Foot_L, Foot_R, toes) and their heights in the skeleton's standing pose
 // (skeleton rest offsets under the standing root, the lowest on the floor or above it).
 struct FootJoints {
@@ -250,7 +235,7 @@ void evaluate_clip(const nlohmann::json& c, const Physics::Weights& w, const Opt
   const int F = static_cast<int>(c["p"].size());
   ClipScorer direct(c, dump, feet, p.skeleton(), tot.direct), physics(c, dump, feet, p.skeleton(), tot.physics);
   for (int t = 0; t < F; ++t) {
-    p.push(frame_of(c, t));
+    p.push(recordings::n3p_dump_frame(c, t));
     if (p.direct().has_output()) direct.score(p.direct().world(), t);
     if (!p.has_output()) continue;
     // The frame the physics output reproduces (its restarts counted from its own start).

@@ -5,7 +5,8 @@
 #include <sstream>
 #include <string>
 
-#include "largest_allocation.hpp"
+#include "loader_test.hpp"
+#include "support/alloc_counter.hpp"
 #include "sparsebody/core/error.hpp"
 #include "sparsebody/dynamics/model_json.hpp"
 #include "sparsebody/io/weights_json.hpp"
@@ -27,22 +28,14 @@ std::string bvh_claiming(const char* frames) {
   return buf;
 }
 
-template <class F>
-std::string load_error(F&& f) {
-  try {
-    f();
-  } catch (const LoadError& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using loader_test::load_error;
 
 constexpr std::size_t kSmall = 64 * 1024;  // what a few-hundred-byte file may justify, generously
 
 }  // namespace
 
 TEST_CASE("a BVH whose header claims far more frames than it holds fails at its end, without reserving them") {
-  loader_test::LargestAllocation largest;
+  sparsebody_test::LargestAllocation largest;
   const std::string e = load_error([] {
     std::istringstream in(bvh_claiming("999999999"));
     recordings::parse_bvh(in, "huge.bvh");
@@ -65,7 +58,7 @@ TEST_CASE("a BVH frame count outside the int range is refused") {
 }
 
 TEST_CASE("a weights tensor whose shape is larger than its data is refused before any allocation") {
-  loader_test::LargestAllocation largest;
+  sparsebody_test::LargestAllocation largest;
   const std::string doc = R"({"format": "sparsebody-weights", "version": 1, "kind": "mlp", "meta": {"input_size": 1, "output_size": 1},
     "tensors": {"w": {"shape": [100000, 100000], "dtype": "float32", "data": "AAAAAAAAAAA="}}})";
   CHECK(load_error([&] { io::parse_weights(doc, "big.json"); }) ==
@@ -105,7 +98,7 @@ TEST_CASE("a model file with more bodies than the model's bound is refused witho
          R"(", "pos": [0, 0.1, 0], "quat": [1, 0, 0, 0], "mass": 1, "com": [0, 0, 0], "inertia": [0.01, 0.01, 0.01, 0, 0, 0]})";
   }
   m += "]}";
-  loader_test::LargestAllocation largest;
+  sparsebody_test::LargestAllocation largest;
   const std::string e = load_error([&] { dynamics::parse_model_json<double, 24, 72>(m, "many.json"); });
   CHECK(e.rfind("many.json: ", 0) == 0);
   CHECK(e.find("24") != std::string::npos);  // names the bound

@@ -6,6 +6,7 @@
 #include <sstream>
 #include <string>
 
+#include "loader_test.hpp"
 #include "sparsebody/core/error.hpp"
 #include "sparsebody/io/weights_json.hpp"
 #include "sparsebody/recordings/bvh.hpp"
@@ -15,15 +16,7 @@ using namespace sparsebody;
 
 namespace {
 
-template <class F>
-std::string load_error(F&& f) {
-  try {
-    f();
-  } catch (const LoadError& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using loader_test::load_error;
 
 bool one_bounded_line(const std::string& s) {
   return !s.empty() && s.size() <= 420 && s.find('\n') == std::string::npos && s.find('\r') == std::string::npos;

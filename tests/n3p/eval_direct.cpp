@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "sparsebody/avatar/n3p_direct.hpp"
+#include "sparsebody/recordings/n3p_validation_dump.hpp"
 #include "sparsebody/pose/rotation6d.hpp"
 
 using namespace sparsebody;
@@ -32,18 +33,7 @@ int evaluate(const nlohmann::json& d, const std::string& prefix, const char* sto
       const int F = static_cast<int>(c["p"].size());
       Eigen::Vector3d prev[2];
       for (int t = 0; t < F; ++t) {
-        trackers::TrackerFrame f;
-        f.time = t / 30.0;
-        for (int k = 0; k < 3; ++k) {
-          const auto& p3 = c["p"][t];
-          const auto& q = c["q6"][t];
-          double d6[6];  // forward (Z) then up (Y) axis, the pipeline's 6D layout
-          for (int i = 0; i < 6; ++i) d6[i] = q[6 * k + i];
-          const Eigen::Matrix3d R = pose::from6d(d6);
-          f.pose[k].position = trackers::to_xr(Eigen::Vector3d(p3[3 * k], p3[3 * k + 1], p3[3 * k + 2]));
-          f.pose[k].orientation = trackers::to_xr(Eigen::Quaterniond(R));
-          f.valid[k] = true;
-        }
+        const trackers::TrackerFrame f = recordings::n3p_dump_frame(c, t);
         p.push(f);
         if (!p.has_output()) continue;
         const auto& J = c["joints"][t];
