@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
-# Sets up a fresh machine and runs every test: C++ (doctest, via CTest) and Python (pytest, via CTest).
+# Sets up a fresh machine and runs every test: C++ (doctest, via CTest), Python (pytest, via CTest)
+# and the fuzz harnesses.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash .ci/install-deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j"$(nproc)"
-cd build && ctest --output-on-failure -j"$(nproc)" --timeout 1500
+(cd build && ctest --output-on-failure -j"$(nproc)" --timeout 1500)
+# libFuzzer harnesses (clang + ASan + UBSan), 60 s each; longer: bash .ci/fuzz.sh SECONDS
+bash .ci/fuzz.sh 60
