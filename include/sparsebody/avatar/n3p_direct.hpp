@@ -68,8 +68,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   // prefix ("…/n3p") or any of the three files; throws LoadError.
   static Weights load(const std::string& path) { return Predictor::load(path); }
 
-  explicit N3PPipeline(const Weights& w, N3PConfig cfg = {})
-      : cfg_(cfg), pred_(w) {
+  explicit N3PPipeline(const Weights& w, N3PConfig cfg = {}) : cfg_(cfg), pred_(w) {
     const pose::Skeleton& s = pred_.skeleton();
     map_ = pose::JointMap::from_names(s, w.lo->info().source);
     this->start_front_end(pred_.meta().frame_rate, cfg.sanitizer, s.size());
