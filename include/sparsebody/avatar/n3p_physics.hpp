@@ -142,6 +142,10 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
     started_ = restart_ = false;
     residual_ = {};
     stats_ = {};
+    // a fresh simulator (contact and actuation state included, options kept) and torques, so that
+    // a reset instance continues bit for bit like a new one (tests/determinism)
+    sim_ = Sim(model_, sim_.options);
+    tau_.setZero();
   }
 
   // --- results --------------------------------------------------------------------------------
