@@ -24,6 +24,7 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "sparsebody/core/error.hpp"
 #include "sparsebody/features/heading_frame.hpp"
@@ -79,11 +80,11 @@ class N3PPredictor {
     const int n = meta_.skeleton.size();
     pose_.resize(n);
     R_.assign(static_cast<std::size_t>(n), Eigen::Matrix3d::Identity());
-    covered_.assign(static_cast<std::size_t>(n), false);
-    for (int i : meta_.lower) covered_[i] = true;
-    for (int i : meta_.upper) covered_[i] = true;
+    std::vector<bool> covered(static_cast<std::size_t>(n), false);  // every joint in J_lo or J_up (load-time check only)
+    for (int i : meta_.lower) covered[i] = true;
+    for (int i : meta_.upper) covered[i] = true;
     for (int i = 0; i < n; ++i)
-      if (!covered_[i]) throw LoadError(w.lo->info().source, "meta.skeleton: joint " + meta_.skeleton.names[i] + " is in neither J_lo nor J_up");
+      if (!covered[i]) throw LoadError(w.lo->info().source, "meta.skeleton: joint " + meta_.skeleton.names[i] + " is in neither J_lo nor J_up");
     if (meta_.skeleton.parents[meta_.lower[0]] >= 0)
       throw LoadError(w.lo->info().source, "meta.lower_body_joints[0] must be the skeleton's root");
     reset();
@@ -239,7 +240,6 @@ class N3PPredictor {
   T z_[n3p::kZ]{}, zstar_[n3p::kZ]{}, glo_[n3p::kGlo]{}, gup_[n3p::kGup]{}, ostar_[n3p::kO]{};
   pose::BodyPose pose_;
   std::vector<Eigen::Matrix3d> R_;  // world rotations, sized once
-  std::vector<bool> covered_;
 };
 
 }  // namespace sparsebody::predict
