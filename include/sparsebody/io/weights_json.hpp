@@ -151,20 +151,9 @@ inline int required_size(const nlohmann::json& meta, const char* key, const std:
 
 }  // namespace detail
 
-// Parses a weights document from text. `source` names it in error messages (usually the file path).
-inline WeightsDocument parse_weights(const std::string& text, const std::string& source) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    // e.what() gives "... parse error at line L, column C: ..." (truncated files end here too).
-    // e.what() ends with the last token read, which for a truncated tensor is all its base64:
-    // LoadError keeps the message to one bounded line.
-    throw LoadError(source, std::string("not valid JSON (truncated or corrupt?) at byte ") + std::to_string(e.byte) + ": " +
-                                excerpt(e.what(), 200));
-  } catch (const nlohmann::json::exception& e) {  // e.g. a number too large for a double (out_of_range.406)
-    throw LoadError(source, std::string("not valid JSON: ") + excerpt(e.what(), 200));
-  }
+namespace detail {
+// The checked document of a parsed JSON value (parse_weights below).
+inline WeightsDocument document_of(const nlohmann::json& j, const std::string& source) {
   if (!j.is_object()) throw LoadError(source, "expected a JSON object at top level");
   if (j.value("format", std::string()) != kWeightsFormat)
     throw LoadError(source, std::string("'format' must be \"") + kWeightsFormat + "\"");
@@ -211,6 +200,29 @@ inline WeightsDocument parse_weights(const std::string& text, const std::string&
   if (!j.contains("tensors")) throw LoadError(source, "missing object 'tensors'");
   detail::parse_tensor_object(j["tensors"], doc.tensors, source, "tensors");
   return doc;
+}
+}  // namespace detail
+
+// Parses a weights document from text. `source` names it in error messages (usually the file path).
+inline WeightsDocument parse_weights(const std::string& text, const std::string& source) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    // e.what() gives "... parse error at line L, column C: ..." (truncated files end here too).
+    // e.what() ends with the last token read, which for a truncated tensor is all its base64:
+    // LoadError keeps the message to one bounded line.
+    throw LoadError(source, std::string("not valid JSON (truncated or corrupt?) at byte ") + std::to_string(e.byte) + ": " +
+                                excerpt(e.what(), 200));
+  } catch (const nlohmann::json::exception& e) {  // e.g. a number too large for a double (out_of_range.406)
+    throw LoadError(source, std::string("not valid JSON: ") + excerpt(e.what(), 200));
+  }
+  // Any JSON value of an unexpected type below (an object where a string belongs) is a LoadError too.
+  try {
+    return detail::document_of(j, source);
+  } catch (const nlohmann::json::exception& e) {
+    throw LoadError(source, std::string("unexpected JSON value: ") + excerpt(e.what(), 200));
+  }
 }
 
 inline std::string read_text_file(const std::string& path) {
