@@ -158,10 +158,12 @@ inline BvhClip parse_bvh(std::istream& in, const std::string& source) {
       c.end_site[stack.back()] = 1;
     } else if (w == "{") {
       if (!pending_end && static_cast<int>(stack.size()) >= s.size()) t.fail("'{' without a joint");
+      if (pending_end && (stack.empty() || stack.back() < 0)) t.fail("End Site braces outside a joint");
       stack.push_back(pending_end ? -2 : s.size() - 1);
       pending_end = false;
     } else if (w == "}") {
       if (stack.empty()) t.fail("unbalanced '}'");
+      if (pending_end) t.fail("expected '{' after End Site");
       stack.pop_back();
     } else if (w == "OFFSET") {
       if (stack.empty()) t.fail("OFFSET outside a joint");
@@ -171,6 +173,7 @@ inline BvhClip parse_bvh(std::istream& in, const std::string& source) {
         int j = -1;
         for (auto it = stack.rbegin(); it != stack.rend(); ++it)
           if (*it >= 0) { j = *it; break; }
+        if (j < 0) t.fail("End Site outside a joint");
         c.end_offset[j] = o;
       } else {
         s.offsets[stack.back()] = o;
