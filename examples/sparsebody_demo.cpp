@@ -69,6 +69,14 @@ int run_lobstr(const Options& o, Input& in) {
   return 0;
 }
 
+// Both Neural3Points modes take the user's size as a calibration scale (direct mode's, §7).
+template <class Pipeline>
+void set_n3p_scale(Pipeline& pipe, double s) {
+  features::n3p::N3PCalibration c;
+  c.base.scale = s;
+  pipe.set_calibration(c);
+}
+
 template <class Pipeline>  // N3PDirect (the paper's sizes, the shipped weights) in float / F16 / Q8
 int run_n3p(const Options& o, Input& in) {
   if (o.mode != avatar::RunMode::Streaming) std::printf("note    --mode window is LoBSTr-only; Neural3Points always streams\n");
@@ -76,11 +84,7 @@ int run_n3p(const Options& o, Input& in) {
   avatar::N3PConfig cfg;
   cfg.foot_ik = o.contact_ik;
   Pipeline pipe(w, cfg);
-  auto set_scale = [&](double s) {
-    features::n3p::N3PCalibration c;
-    c.base.scale = s;
-    pipe.set_calibration(c);
-  };
+  auto set_scale = [&](double s) { set_n3p_scale(pipe, s); };
   if (!fit_user(o, in, pipe, set_scale)) return 1;
   std::printf("model   Neural3Points direct mode %s: G_sig/G_lo/G_up hidden %d/%d/%d, %s weights, %s, %.0f fps\n", o.weights.c_str(),
               Pipeline::kHiddenSignal, Pipeline::kHiddenLower, Pipeline::kHiddenUpper, o.storage.c_str(),
@@ -93,17 +97,13 @@ int run_n3p(const Options& o, Input& in) {
 
 template <typename W>  // weight storage: float, nn::f16, nn::q8
 int run_n3p_physics(const Options& o, Input& in) {
-  using Pipeline = avatar::N3PPhysicsPipeline<float, 64, 128, 128, float, 24, 72, W>;
+  using Pipeline = avatar::N3PPhysicsDefaultSizes<W>;
   using Direct = typename Pipeline::Direct;
   const auto w = Pipeline::load(o.weights);
   avatar::N3PPhysicsConfig cfg;
   cfg.direct.foot_ik = o.contact_ik;
   Pipeline pipe(w, cfg);
-  auto set_scale = [&](double s) {
-    features::n3p::N3PCalibration c;
-    c.base.scale = s;
-    pipe.set_calibration(c);
-  };
+  auto set_scale = [&](double s) { set_n3p_scale(pipe, s); };
   if (!fit_user(o, in, pipe, set_scale)) return 1;
   std::printf("model   Neural3Points physics (normal) mode %s: G_sig/G_lo/G_up hidden %d/%d/%d, %s weights, simulated\n"
               "        avatar %d bodies / %d DoF at 120 Hz, model-based controller, output %.1f s behind the input\n",
