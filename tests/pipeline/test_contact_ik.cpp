@@ -3,6 +3,7 @@
 
 #include "sparsebody/pose/contact.hpp"
 #include "sparsebody/pose/ik.hpp"
+#include "sparsebody/trackers/stillness.hpp"
 
 using namespace sparsebody;
 using Eigen::Vector3d;
@@ -123,4 +124,52 @@ TEST_CASE("foot lock, direct-mode options: pinned at the joint's own height; Rea
     CHECK(lock.state() == (rearm == pose::FootLock::Rearm::SameFrame ? pose::FootLock::State::Locked
                                                                      : pose::FootLock::State::Blending));
   }
+}
+
+TEST_CASE("foot lock hold: while the user stands still a lock survives contact off and drift, not the reach limit") {
+  pose::FootLock lock(10);
+  const Vector3d hip(0, 0.9, 0);
+  Vector3d target;
+  REQUIRE(lock.update(true, Vector3d(0.1, 0.05, 0.2), hip, 1.0, 0.1, 0.042, target));
+  lock.hold(true);
+  // the network flickers the contact off and lets the toe creep 30 cm: the lock holds
+  for (int k = 0; k < 20; ++k) {
+    REQUIRE(lock.update(k % 2 == 0, Vector3d(0.1 + 0.015 * k, 0.05, 0.2), hip, 1.0, 0.1, 0.042, target));
+    CHECK(target.isApprox(Vector3d(0.1, 0.042, 0.2)));
+  }
+  CHECK(lock.state() == pose::FootLock::State::Locked);
+  // a hip that walked away: the reach limit still releases it (blend towards the network's toe)
+  REQUIRE(lock.update(true, Vector3d(1.6, 0.05, 0.2), Vector3d(1.5, 0.9, 0), 1.0, 0.1, 0.042, target));
+  CHECK(lock.state() == pose::FootLock::State::Blending);
+  // moving again: hold off, the normal rules apply (contact off releases)
+  lock.hold(false);
+  pose::FootLock l2(10);
+  REQUIRE(l2.update(true, Vector3d(0.1, 0.05, 0.2), hip, 1.0, 0.1, 0.042, target));
+  REQUIRE(l2.update(false, Vector3d(0.1, 0.05, 0.2), hip, 1.0, 0.1, 0.042, target));
+  CHECK(l2.state() == pose::FootLock::State::Blending);
+}
+
+TEST_CASE("stillness: still after 0.3 s of a calm headset, not while walking or turning on the spot, NaN resets") {
+  trackers::Stillness s;
+  const double dt = 1.0 / 30;
+  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+  int first_still = -1;
+  for (int i = 0; i < 30; ++i) {  // standing with 1 cm/s sway
+    s.update(Vector3d(0.01 * std::sin(i * dt), 1.6, 0), q, dt);
+    if (s.still() && first_still < 0) first_still = i;
+  }
+  CHECK(first_still >= 9);
+  CHECK(first_still <= 16);  // 0.3 s plus the low-pass settling
+  for (int i = 0; i < 30; ++i) s.update(Vector3d(1.0 * i * dt, 1.6, 0), q, dt);  // walking at 1 m/s
+  CHECK_FALSE(s.still());
+  trackers::Stillness t;
+  for (int i = 0; i < 60; ++i)  // turning on the spot at 90 deg/s
+    t.update(Vector3d(0, 1.6, 0), Eigen::Quaterniond(Eigen::AngleAxisd(i * dt * M_PI / 2, Vector3d::UnitY())), dt);
+  CHECK_FALSE(t.still());
+  trackers::Stillness u;
+  for (int i = 0; i < 30; ++i) u.update(Vector3d(0, 1.6, 0), q, dt);
+  CHECK(u.still());
+  u.update(Vector3d(NAN, 1.6, 0), q, dt);
+  CHECK_FALSE(u.still());
+  CHECK(std::isfinite(u.speed()));
 }

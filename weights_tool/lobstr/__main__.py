@@ -29,6 +29,8 @@ def main(argv=None):
     pr.add_argument("--offset-deg", type=float, default=0.0)
     pr.add_argument("--scale-jitter", type=float, default=0.0)
     pr.add_argument("--limit", type=int)
+    pr.add_argument("--device-realisations", type=int, default=0,
+                    help="extra realisations per clip on random bodies with device-realistic trackers")
     sub.add_parser("train", help="see: train --help")
     sub.add_parser("evaluate", help="see: evaluate --help")
     ex = sub.add_parser("export")
@@ -41,7 +43,8 @@ def main(argv=None):
     a = p.parse_args(argv)
     if a.cmd == "prepare":
         from . import dataset
-        dataset.build(a.data_dir, a.out, a.realisations, a.seed, a.limit, a.offset_deg, a.scale_jitter)
+        dataset.build(a.data_dir, a.out, a.realisations, a.seed, a.limit, a.offset_deg, a.scale_jitter,
+                      device_realisations=a.device_realisations)
     elif a.cmd == "export":
         from .export import export
         print("wrote", export(a.checkpoint, a.out, a.command))

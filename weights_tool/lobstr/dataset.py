@@ -36,7 +36,24 @@ def clip_arrays(clip, rng=None, offset_deg=0.0, scale_jitter=0.0):
     return X.astype(np.float32), Y.astype(np.float32), C
 
 
-def build(data_dir, out_path, realisations=1, seed=0, limit=None, offset_deg=0.0, scale_jitter=0.0, every=1):
+def clip_arrays_devices(clip, rng):
+    """Features, targets and contacts of one clip on a random body at a random speed, with trackers
+    placed like real devices (weights_tool/devices.py)."""
+    from .. import devices
+    aug = devices.Augment(rng)
+    c = devices.scale_body(devices.retime(clip, aug.speed), aug)
+    P, Q, s = devices.device_trackers(c, aug)
+    X = feat.features(P, Q, s)
+    idx = [c.bvh.index(n) for n in LOWER]
+    Y = to6d(c.R_local[:, idx]).reshape(c.frames, 48)
+    C = contact_labels(c, c.floor())
+    return X.astype(np.float32), Y.astype(np.float32), C
+
+
+def build(data_dir, out_path, realisations=1, seed=0, limit=None, offset_deg=0.0, scale_jitter=0.0, every=1,
+          device_realisations=0):
+    """realisations: noisy trackers at the joints (the paper's setting); device_realisations: more
+    realisations per clip from clip_arrays_devices."""
     files = sorted(glob.glob(os.path.join(data_dir, "*.bvh")))[::every]
     if limit:
         files = files[:limit]
@@ -49,6 +66,9 @@ def build(data_dir, out_path, realisations=1, seed=0, limit=None, offset_deg=0.0
             continue
         for r in range(realisations):
             X, Y, C = clip_arrays(clip, rng if realisations > 0 else None, offset_deg, scale_jitter)
+            Xs.append(X), Ys.append(Y), Cs.append(C), lens.append(len(X)), names.append(os.path.basename(f))
+        for r in range(device_realisations):
+            X, Y, C = clip_arrays_devices(clip, rng)
             Xs.append(X), Ys.append(Y), Cs.append(C), lens.append(len(X)), names.append(os.path.basename(f))
         if n % 200 == 0:
             print(f"  {n}/{len(files)} clips, {time.time() - t:.0f} s", flush=True)

@@ -126,6 +126,10 @@ def main(argv=None):
     p.add_argument("--val-every", type=int, default=200)
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--init", default=None, help="start from these weights (.pt checkpoint or exported "
+                   ".weights.json) and keep their input normalization: fine-tuning")
+    p.add_argument("--resume", default=None, help="continue a run from its OUT.last checkpoint (model, "
+                   "optimizer, schedule, iteration, best loss); --minutes counts from the resume")
     a = p.parse_args(argv)
     torch.set_num_threads(a.threads)
     torch.manual_seed(a.seed)
@@ -136,11 +140,28 @@ def main(argv=None):
     std = np.maximum(X.std(0), 1e-3)
     tmean, tstd = torch.from_numpy(mean), torch.from_numpy(std)
     model = LoBSTrNet(hidden=a.hidden, latent=a.latent)
+    if a.init:
+        sd, norm = load_init(a.init)
+        model.load_state_dict(sd, strict=True)
+        mean, std = norm["input_mean"].astype(np.float64), norm["input_std"].astype(np.float64)
+        tmean, tstd = torch.from_numpy(mean).float(), torch.from_numpy(std).float()
+        print(f"init from {a.init}", flush=True)
     opt = torch.optim.Adam(model.parameters(), lr=a.lr)
     sched = torch.optim.lr_scheduler.StepLR(opt, step_size=a.decay_every, gamma=0.999)
     fk = ToeFK()
     prob = lens / lens.sum()
     best, t0, it = float("inf"), time.time(), 0
+    if a.resume:
+        ck = torch.load(a.resume, weights_only=False)
+        model.load_state_dict(ck["state_dict"])
+        opt.load_state_dict(ck["optimizer"])
+        sched.load_state_dict(ck["scheduler"])
+        mean, std = ck["normalization"]["input_mean"].numpy().astype(np.float64), ck["normalization"]["input_std"].numpy().astype(np.float64)
+        tmean, tstd = torch.from_numpy(mean).float(), torch.from_numpy(std).float()
+        it, best = ck["iteration"], ck["best"]
+        rng.bit_generator.state = ck["rng"]
+        torch.set_rng_state(ck["torch_rng"])
+        print(f"resumed {a.resume} at iteration {it}, best validation loss {best:.4f}", flush=True)
     print(f"train: {len(lens)} sequences, {lens.sum()} frames; val: {len(val[3])} sequences; "
           f"H={a.hidden} latent={a.latent}", flush=True)
     while it < a.max_iters and time.time() - t0 < a.minutes * 60:
@@ -164,11 +185,33 @@ def main(argv=None):
                 best, tag = vl, " (best, saved)"
                 save(a.out, model, mean, std, a, it, vl)
             print(f"VAL it {it} loss {vl:.4f} " + " ".join(f"{k} {v:.4f}" for k, v in vp.items()) + tag, flush=True)
+            save_last(a.out + ".last", model, opt, sched, mean, std, it, best, rng)
     vl, vp = evaluate_loss(model, val, tmean, tstd, fk)
     if vl < best:
         save(a.out, model, mean, std, a, it, vl)
         best = vl
     print(f"done: {it} iterations in {time.time() - t0:.0f}s, best validation loss {best:.4f}", flush=True)
+
+
+def load_init(path):
+    """(state_dict, normalization numpy) from a checkpoint or an exported weights JSON."""
+    if path.endswith(".json"):
+        from ..format import read_weights
+        _, tensors, norm = read_weights(path)
+        return {k: torch.from_numpy(v).float() for k, v in tensors.items()}, norm
+    ck = torch.load(path, weights_only=False)
+    return ck["state_dict"], {k: v.numpy() for k, v in ck["normalization"].items()}
+
+
+def save_last(path, model, opt, sched, mean, std, it, best, rng):
+    """Everything --resume needs (written next to the best checkpoint at every validation)."""
+    torch.save({"state_dict": model.state_dict(), "optimizer": opt.state_dict(), "scheduler": sched.state_dict(),
+                "normalization": {"input_mean": torch.from_numpy(mean.astype(np.float32)),
+                                  "input_std": torch.from_numpy(std.astype(np.float32))},
+                "iteration": it, "best": best, "rng": rng.bit_generator.state, "torch_rng": torch.get_rng_state()},
+               path + ".tmp")
+    import os
+    os.replace(path + ".tmp", path)
 
 
 def save(path, model, mean, std, a, it, vl):

@@ -34,8 +34,12 @@ def main(argv=None):
         p.add_argument("out")
         p.add_argument("--every", type=int, default=1)
         p.add_argument("--limit", type=int, default=None)
+        p.add_argument("--device-realisations", type=int, default=0,
+                       help="copies per clip on random bodies with device-realistic trackers")
+        p.add_argument("--no-plain", action="store_true", help="leave out the trackers-at-the-joints copy")
+        p.add_argument("--seed", type=int, default=0)
         a = p.parse_args(rest)
-        dataset.build(a.data_dir, a.out, a.every, a.limit)
+        dataset.build(a.data_dir, a.out, a.every, a.limit, a.device_realisations, not a.no_plain, a.seed)
     elif cmd == "export":
         from . import export, train
         from .dataset import Data

@@ -60,7 +60,30 @@ def clip_arrays(clip):
     return dict(P=P, Q6=Q6, V=V, TP=TP, TQ6=TQ6, H=H, C=C, Cv=Cv, L=L, CT=CT)
 
 
-def build(data_dir, out_path, every=1, limit=None):
+def clip_arrays_devices(clip, rng):
+    """clip_arrays of the clip at a random speed, with the tracker inputs taken from a random body with
+    device-realistic trackers (weights_tool/devices.py) scaled by the height scale the runtime finds.
+    Targets stay the standard skeleton's (the predictor's output skeleton). The varied body's normalised
+    ground track is moved onto the standard one's so the inputs and the heading targets agree."""
+    from .. import devices
+    aug = devices.Augment(rng)
+    cs = devices.retime(clip, aug.speed)
+    cv = devices.scale_body(cs, aug)
+    a = clip_arrays(cs)
+    P, Q, s = devices.device_trackers(cv, aug)
+    TP = P[:, :3] * s
+    hips = clip.roles["hips"]
+    shift = cs.pw[:, hips, [0, 2]] - s * cv.pw[:, hips, [0, 2]]
+    TP[..., 0] += shift[:, None, 0]
+    TP[..., 2] += shift[:, None, 1]
+    a["TP"], a["TQ6"] = TP, to6d(Q[:, :3])
+    return a
+
+
+def build(data_dir, out_path, every=1, limit=None, device_realisations=0, plain=True, seed=0):
+    """plain: the clip with trackers at the joints (as before); device_realisations: that many more
+    copies per clip from clip_arrays_devices (seeded)."""
+    rng = np.random.default_rng(seed)
     files = sorted(glob.glob(os.path.join(data_dir, "*.bvh")))[::every]
     if limit:
         files = files[:limit]
@@ -71,11 +94,12 @@ def build(data_dir, out_path, every=1, limit=None):
         clip = Clip(f)
         if clip.frames < 8 or abs(clip.fps - FPS) > 0.5:
             continue
-        a = clip_arrays(clip)
-        for k in KEYS:
-            parts[k].append(a[k].astype(np.float32))
-        lens.append(clip.frames)
-        names.append(os.path.basename(f))
+        arrays = ([clip_arrays(clip)] if plain else []) + [clip_arrays_devices(clip, rng) for _ in range(device_realisations)]
+        for a in arrays:
+            for k in KEYS:
+                parts[k].append(a[k].astype(np.float32))
+            lens.append(len(a["P"]))
+            names.append(os.path.basename(f))
         if n % 100 == 0:
             print(f"  {n}/{len(files)} clips, {time.time() - t:.0f} s", flush=True)
     np.savez(out_path, lens=np.array(lens), names=np.array(names), **{k: np.concatenate(v) for k, v in parts.items()})

@@ -161,6 +161,8 @@ def main(argv=None):
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--resume", default=None, help="checkpoint to continue from: pretraining is skipped, only "
                    "fine-tuning runs (its --minutes budget)")
+    p.add_argument("--init", default=None, help="exported weights prefix (e.g. examples/weights/n3p) to start "
+                   "every stage from, keeping its normalization: fine-tuning on new data")
     a = p.parse_args(argv)
     torch.set_num_threads(a.threads)
     torch.manual_seed(a.seed)
@@ -171,10 +173,16 @@ def main(argv=None):
         nets, info = load(a.resume)
         info.setdefault("resumed", []).append(cmd)
     else:
-        nets = [Sub(n, h) for n, h in zip(("sig", "lo", "up"), a.hidden)]
-        set_normalization(nets, tr, rng)
+        if a.init:
+            from .weights import load as load_exported
+            nets, _ = load_exported(a.init)
+            print(f"init from {a.init}", flush=True)
+        else:
+            nets = [Sub(n, h) for n, h in zip(("sig", "lo", "up"), a.hidden)]
+            set_normalization(nets, tr, rng)
         info = {"command": cmd, "T": a.T, "batch": a.batch, "lr": a.lr,
-                "train_clips": int(len(tr.lens)), "train_frames": int(tr.lens.sum()), "stages": {}}
+                "train_clips": int(len(tr.lens)), "train_frames": int(tr.lens.sum()), "stages": {},
+                "init": a.init}
     print(f"train: {len(tr.lens)} clips {tr.lens.sum()} frames; val: {len(va.lens)} clips", flush=True)
     T = a.T
     for si, sub in enumerate(nets if not a.resume else []):

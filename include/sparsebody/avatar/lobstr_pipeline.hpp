@@ -29,6 +29,7 @@
 #include "sparsebody/nn/network.hpp"
 #include "sparsebody/pose/body_pose.hpp"
 #include "sparsebody/pose/contact.hpp"
+#include "sparsebody/trackers/stillness.hpp"
 #include "sparsebody/pose/ik.hpp"
 #include "sparsebody/pose/joint_map.hpp"
 #include "sparsebody/pose/rotation6d.hpp"
@@ -44,6 +45,11 @@ struct LoBSTrConfig {
   double contact_threshold = 0.5;  // P(contact) above which a foot is in contact
   double lock_max_drift = 0.10;    // m: release a lock the network's toe has left this far (standard scale)
   bool contact_ik = true;          // §3.4.1 post-processing
+  // While the user stands still (trackers::Stillness on the headset) locked feet stay locked and a
+  // foot the network gives at least still_contact_threshold locks too: no creeping feet.
+  bool hold_feet_when_still = true;
+  double still_contact_threshold = 0.25;
+  trackers::StillnessConfig stillness{};
   bool upper_body_ik = true;
   trackers::SanitizerConfig sanitizer{};
 };
@@ -68,6 +74,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     map_ = pose::JointMap::from_names(s, w->info().source);
     F_hips_T_ = pose::hips_tracker_frame(s, map_).transpose();
     this->start_front_end(meta_.frame_rate, cfg.sanitizer, s.size());
+    still_ = trackers::Stillness(cfg.stillness);
     window_ = cfg_.window > 0 ? cfg_.window : static_cast<int>(meta_.frame_rate + 0.5);
     if (cfg_.mode == RunMode::Window) ring_.assign(static_cast<std::size_t>(window_) * kFeatures, T(0));
     upper_ = LoBSTrUpperBody(s, map_);
@@ -91,6 +98,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     ++frames_;
     if (!s.usable) { out_.invalidate(); return; }
     calib_.apply(s.pose, cal_);
+    still_.update(cal_[0].position, cal_[0].orientation, 1.0 / meta_.frame_rate);
     feat_.compute(cal_, x_);
     const T* y = run_network();
     for (int i = 0; i < Net::out_size; ++i) y_[i] = y[i];
@@ -121,6 +129,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   double contact_probability(int foot) const noexcept { return y_[48 + 2 * foot + 1]; }
   bool contact(int foot) const noexcept { return contact_probability(foot) > cfg_.contact_threshold; }
   bool foot_locked(int foot) const noexcept { return lock_[foot].state() != pose::FootLock::State::Free; }
+  bool standing_still() const noexcept { return still_.still(); }
   int window() const noexcept { return window_; }
   RunMode mode() const noexcept { return cfg_.mode; }
 
@@ -134,6 +143,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     feat_.reset();
     lock_[0].reset();
     lock_[1].reset();
+    still_.reset();
     filled_ = 0;
     head_ = 0;
   }
@@ -171,7 +181,10 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       const Eigen::Vector3d hip = out_.world().position[ul];
       const double reach = 1.02 * (s.offsets[ll].norm() + s.offsets[ft].norm()) + s.offsets[toe].norm();
       Eigen::Vector3d target;
-      if (!lock_[foot].update(contact(foot), out_.world().position[toe], hip, reach, cfg_.lock_max_drift, meta_.toe_height, target)) continue;
+      const bool still = cfg_.hold_feet_when_still && still_.still();
+      lock_[foot].hold(still);
+      const bool in_contact = contact(foot) || (still && contact_probability(foot) > cfg_.still_contact_threshold);
+      if (!lock_[foot].update(in_contact, out_.world().position[toe], hip, reach, cfg_.lock_max_drift, meta_.toe_height, target)) continue;
       // ankle target keeps the foot's world orientation: ankle = target - (toe - ankle)
       const Eigen::Vector3d ankle_t = target - (out_.world().position[toe] - out_.world().position[ft]);
       const pose::WorldPose& w = out_.world();
@@ -197,6 +210,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   T x_[kFeatures] = {};
   T y_[Net::out_size] = {};
   pose::FootLock lock_[2];
+  trackers::Stillness still_;
   std::vector<T> ring_;
   int window_ = 30, filled_ = 0, head_ = 0;
   LoBSTrUpperBody upper_;

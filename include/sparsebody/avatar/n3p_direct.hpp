@@ -43,6 +43,7 @@
 #include "sparsebody/pose/ik.hpp"
 #include "sparsebody/pose/joint_map.hpp"
 #include "sparsebody/predict/n3p_predictor.hpp"
+#include "sparsebody/trackers/stillness.hpp"
 
 namespace sparsebody::avatar {
 
@@ -53,6 +54,11 @@ struct N3PConfig {
   bool use_controllers = true;     // false: HMD-only mode even when controllers are tracked
   double controller_max_distance = 1.5;  // from the headset (m, user's size); further: missing
   double foot_max_drift = 0.3;     // a pinned foot further than this from the prediction is released (m)
+  // While the user stands still (trackers::Stillness on the headset) pinned feet stay pinned and a
+  // foot the predictor gives at least still_contact_threshold pins too: no creeping feet.
+  bool hold_feet_when_still = true;
+  double still_contact_threshold = 0.25;
+  trackers::StillnessConfig stillness{};
   trackers::SanitizerConfig sanitizer{};
 };
 
@@ -72,6 +78,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     const pose::Skeleton& s = pred_.skeleton();
     map_ = pose::JointMap::from_names(s, w.lo->info().source);
     this->start_front_end(pred_.meta().frame_rate, cfg.sanitizer, s.size());
+    still_ = trackers::Stillness(cfg.stillness);
     auto f = [&](const char* n) { return s.find(n); };
     const char* arm[2][3] = {{"UpperArm_L", "LowerArm_L", "Hand_L"}, {"UpperArm_R", "LowerArm_R", "Hand_R"}};
     const char* leg[2][3] = {{"UpperLeg_L", "LowerLeg_L", "Foot_L"}, {"UpperLeg_R", "LowerLeg_R", "Foot_R"}};
@@ -107,6 +114,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     features::n3p::TrackerSet o;
     std::array<bool, 3> present{true, false, false};  // the headset: measured or held
     o[0] = calib_.apply(0, s.pose[0]);
+    still_.update(s.pose[0].position, s.pose[0].orientation, 1.0 / pred_.meta().frame_rate);
     for (int k = 1; k < 3; ++k) {
       trackers::PoseD c;
       present[k] = cfg_.use_controllers && controller(f, k, s.pose[0].position, c);
@@ -141,6 +149,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   double contact_probability(int foot) const noexcept { return pred_.contact(foot); }
   bool contact(int foot) const noexcept { return contact_probability(foot) > cfg_.contact_threshold; }
   bool foot_locked(int foot) const noexcept { return lock_[foot].state() != pose::FootLock::State::Free; }
+  bool standing_still() const noexcept { return still_.still(); }
   // Controllers replaced by o* in the last frame (0: 3-point, 1: one controller, 2: HMD only).
   int predicted_controllers() const noexcept { return pred_.substituted(1) + pred_.substituted(2); }
   // The calibrated trackers of the last usable frame (joint poses, standard-skeleton scale) and which
@@ -158,6 +167,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     pred_.reset();
     lock_[0].reset();
     lock_[1].reset();
+    still_.reset();
   }
 
   // Controller k of the raw frame when it is usable (see the bad-input rules above).
@@ -179,7 +189,10 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     for (int side = 0; side < 2; ++side) {
       const int* l = leg_[side];
       Eigen::Vector3d target;
-      if (lock_[side].update(contact(side), out_.world().position[l[2]], out_.world().position[l[0]], reach_[side], cfg_.foot_max_drift,
+      const bool still = cfg_.hold_feet_when_still && still_.still();
+      lock_[side].hold(still);
+      const bool c = contact(side) || (still && contact_probability(side) > cfg_.still_contact_threshold);
+      if (lock_[side].update(c, out_.world().position[l[2]], out_.world().position[l[0]], reach_[side], cfg_.foot_max_drift,
                              target)) {
         put_limb(l, target);
         pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
@@ -208,6 +221,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   // later frame before it pins again.
   pose::FootLock lock_[2] = {pose::FootLock(8, pose::FootLock::Rearm::NextFrame),
                              pose::FootLock(8, pose::FootLock::Rearm::NextFrame)};
+  trackers::Stillness still_;
   features::n3p::TrackerSet trackers_{};
   std::array<bool, 3> present_{};
   int arm_[2][3] = {}, leg_[2][3] = {};

@@ -12,6 +12,9 @@
 // missed contact release), is released through the same blend and held off: it does not lock again
 // until the contact flag has gone off once. Rearm says whether the release frame's own "off"
 // counts (SameFrame, LoBSTr) or only a later one does (NextFrame, Neural3Points).
+// hold(true) (the user stands still, trackers/stillness.hpp): a locked foot stays locked whatever
+// the contact flag or the drift says (only the reach limit still releases it), so the avatar's feet
+// do not creep while the user stands; the pipeline clears it on the first moving frame.
 #pragma once
 #include <cmath>
 
@@ -25,7 +28,8 @@ class FootLock {
   enum class Rearm { SameFrame, NextFrame };
 
   explicit FootLock(int blend_frames = 10, Rearm rearm = Rearm::SameFrame) : n_(blend_frames), rearm_(rearm) {}
-  void reset() noexcept { state_ = State::Free; hold_off_ = false; }
+  void reset() noexcept { state_ = State::Free; hold_off_ = false; hold_ = false; }
+  void hold(bool h) noexcept { hold_ = h; }
   State state() const noexcept { return state_; }
 
   // One frame: contact state, the predicted joint (toe) position, the hip position and the leg's
@@ -45,6 +49,10 @@ class FootLock {
               const double* lock_height, Eigen::Vector3d& target) noexcept {
     const bool predicted_contact = contact;
     if (rearm_ == Rearm::NextFrame && !predicted_contact) hold_off_ = false;
+    if (hold_ && state_ == State::Locked && (lock_ - hip).norm() <= max_reach) {
+      target = current_ = lock_;
+      return true;
+    }
     if (state_ == State::Locked && ((lock_ - hip).norm() > max_reach || (lock_ - joint).norm() > max_drift)) {
       contact = false;
       hold_off_ = true;  // do not re-lock until the contact goes off once
@@ -85,7 +93,7 @@ class FootLock {
   Rearm rearm_;
   State state_ = State::Free;
   int k_ = 0;
-  bool hold_off_ = false;
+  bool hold_off_ = false, hold_ = false;
   Eigen::Vector3d lock_ = Eigen::Vector3d::Zero(), from_ = Eigen::Vector3d::Zero(), current_ = Eigen::Vector3d::Zero();
 };
 

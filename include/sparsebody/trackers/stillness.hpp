@@ -1,0 +1,64 @@
+// Is the user standing still? From the headset alone (every pipeline has it), per model frame:
+// its horizontal speed and yaw rate, each low-passed over ~0.2 s. Still once both stay below the
+// "enter" thresholds for `enter_seconds`; moving again as soon as one exceeds its "leave"
+// threshold (hysteresis, so that sway does not flicker it). Turning on the spot is not still: the
+// feet must be free to step round. Used to hold foot locks (pose::FootLock::hold) so that the
+// avatar's feet do not creep while the user stands (issue 12: <= 1 cm/s standing still).
+#pragma once
+#include <cmath>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace sparsebody::trackers {
+
+struct StillnessConfig {
+  double enter_speed = 0.06;  // m/s, horizontal headset speed (low-passed)
+  double leave_speed = 0.15;
+  double enter_yaw_rate = 0.35;  // rad/s (20 deg/s)
+  double leave_yaw_rate = 0.8;
+  double enter_seconds = 0.3;
+  double time_constant = 0.2;  // s, of the low-pass
+};
+
+class Stillness {
+ public:
+  explicit Stillness(StillnessConfig c = {}) : cfg_(c) {}
+  void reset() noexcept { have_ = false; still_ = false; calm_ = 0; speed_ = yaw_rate_ = 0; }
+  bool still() const noexcept { return still_; }
+  double speed() const noexcept { return speed_; }
+  double yaw_rate() const noexcept { return yaw_rate_; }
+
+  // The headset's position and orientation (any consistent scale: thresholds are in that unit per
+  // second; the pipelines pass the calibrated, standard-scale pose) and the frame's duration.
+  bool update(const Eigen::Vector3d& p, const Eigen::Quaterniond& q, double dt) noexcept {
+    const Eigen::Vector3d f = q * Eigen::Vector3d::UnitZ();
+    const double yaw = std::atan2(f.x(), f.z());
+    if (!(dt > 0) || !p.allFinite() || !std::isfinite(yaw)) { reset(); return false; }
+    if (have_) {
+      const double v = std::hypot(p.x() - p_.x(), p.z() - p_.z()) / dt;
+      const double w = std::abs(std::remainder(yaw - yaw_, 2 * M_PI)) / dt;
+      const double a = 1.0 - std::exp(-dt / cfg_.time_constant);
+      speed_ += a * (v - speed_);
+      yaw_rate_ += a * (w - yaw_rate_);
+      if (still_) {
+        if (speed_ > cfg_.leave_speed || yaw_rate_ > cfg_.leave_yaw_rate) still_ = false, calm_ = 0;
+      } else {
+        calm_ = (speed_ < cfg_.enter_speed && yaw_rate_ < cfg_.enter_yaw_rate) ? calm_ + dt : 0;
+        still_ = calm_ >= cfg_.enter_seconds;
+      }
+    }
+    have_ = true;
+    p_ = p;
+    yaw_ = yaw;
+    return still_;
+  }
+
+ private:
+  StillnessConfig cfg_;
+  bool have_ = false, still_ = false;
+  double calm_ = 0, speed_ = 0, yaw_rate_ = 0, yaw_ = 0;
+  Eigen::Vector3d p_ = Eigen::Vector3d::Zero();
+};
+
+}  // namespace sparsebody::trackers

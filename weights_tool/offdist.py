@@ -1,0 +1,209 @@
+"""Off-distribution measures of the whole C++ pipeline (issue 12, item 5), from the demo's output BVH
+against the clip that drove it, the same way for every input path:
+
+  nominal  validation BVH, trackers synthesised at the joints (the in-distribution setting)
+  devices  validation BVH, device-realistic trackers (eye point, grips, losses, 72 Hz) and automatic
+           calibration, as a real session (the demo's --devices)
+  s155, s190, longlegs, shortlegs   the same on validation clips retargeted to other bodies
+           (weights_tool/bodies.py presets)
+  csv      the device-realistic stream written as the demo's tracker CSV (--trackers-out) and read
+           back through the CSV path with default options (no T-pose, walking from frame 0)
+  cmu      the CMU clips of Debian's assimp-testmodels (another performer, another skeleton)
+
+Metrics (12 joints mapped by role: hips, head, hands, thighs, knees, ankles, toes; metres -> cm):
+  mpjpe        mean joint position error, world, floor at y = 0
+  lower        the same over hips and legs
+  toe          toe-base position error
+  skate        mean horizontal toe speed of the output while the clip's foot is in contact (cm/s)
+  still_feet   mean horizontal toe speed of the output while the clip's performer stands still (head
+               and both toes slower than 5 cm/s for >= 0.5 s) (cm/s)
+  head         mean distance of the output's head joint from the clip's (the head joint sits where the
+               eye-point offset puts it relative to the headset) (cm)
+
+  /usr/bin/python3 -m weights_tool.offdist DEMO VALIDATION_DIR --modes nominal devices s155 ... \\
+        [--models lobstr n3p] [--every 5] [--json out.json] [-- extra demo options]
+"""
+import argparse
+import glob
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+from .lobstr.skeleton import Clip, contact_labels
+
+ROLES = ["hips", "head", "hand_l", "hand_r", "upleg_l", "upleg_r", "leg_l", "leg_r", "foot_l", "foot_r",
+         "toe_l", "toe_r"]
+LOWER = ["hips", "upleg_l", "upleg_r", "leg_l", "leg_r", "foot_l", "foot_r", "toe_l", "toe_r"]
+CMU = ["/usr/share/assimp/models/BVH/01_01.bvh", "/usr/share/assimp/models/BVH/01_03.bvh",
+       "/usr/share/assimp/models/BVH/Boxing_Toes.bvh"]
+
+
+def hspeed(p, fps):
+    v = np.zeros(len(p))
+    if len(p) > 1:
+        v[1:] = np.linalg.norm(np.diff(p[:, [0, 2]], axis=0), axis=-1) * fps
+        v[0] = v[1]
+    return v
+
+
+def still_mask(truth, P, fps, speed=0.05, seconds=0.5):
+    """Frames in runs of >= `seconds` where the head and both toes move slower than `speed`."""
+    r = truth.roles
+    slow = (hspeed(P[:, ROLES.index("head")], fps) < speed) & (hspeed(P[:, ROLES.index("toe_l")], fps) < speed) & \
+           (hspeed(P[:, ROLES.index("toe_r")], fps) < speed)
+    out = np.zeros_like(slow)
+    n = int(seconds * fps)
+    i = 0
+    while i < len(slow):
+        if slow[i]:
+            j = i
+            while j < len(slow) and slow[j]:
+                j += 1
+            if j - i >= n:
+                out[i:j] = True
+            i = j
+        else:
+            i += 1
+    return out
+
+
+def compare(out_bvh, truth_bvh, truth_units=None):
+    """Per-frame sums of the metrics of one run (dict of (sum, count))."""
+    out, truth = Clip(out_bvh, units=0.01), Clip(truth_bvh, units=truth_units)
+    fps = truth.fps
+    n = min(out.frames, truth.frames)
+    if n < 2:
+        return None
+    Po = out.pw[:n, [out.roles[k] for k in ROLES]]
+    Pt = truth.pw[:n, [truth.roles[k] for k in ROLES]].copy()
+    Pt[..., 1] -= truth.floor()
+    if abs(truth.fps - 30.0) > 0.5:
+        # the pipelines run at 30 Hz: compare output frame i with the clip at time i / 30
+        t = np.arange(out.frames) / 30.0
+        idx = np.minimum(np.round(t * truth.fps).astype(int), truth.frames - 1)
+        Pt_full = truth.pw[:, [truth.roles[k] for k in ROLES]].copy()
+        Pt_full[..., 1] -= truth.floor()
+        Pt, Po, fps, n = Pt_full[idx], out.pw[:, [out.roles[k] for k in ROLES]], 30.0, out.frames
+        C = contact_labels(truth, truth.floor())[idx]
+    else:
+        C = contact_labels(truth, truth.floor())[:n]
+    e = np.linalg.norm(Po - Pt, axis=-1)
+    li = [ROLES.index(k) for k in LOWER]
+    ti = [ROLES.index("toe_l"), ROLES.index("toe_r")]
+    m = {"mpjpe": (e.sum(), e.size), "lower": (e[:, li].sum(), e[:, li].size), "toe": (e[:, ti].sum(), e[:, ti].size),
+         "head": (e[:, ROLES.index("head")].sum(), n)}
+    sk, skn = 0.0, 0
+    for s, j in enumerate(ti):
+        v = hspeed(Po[:, j], fps)
+        sk += v[C[:, s] > 0].sum()
+        skn += int((C[:, s] > 0).sum())
+    m["skate"] = (sk, skn)
+    st = still_mask(truth, Pt, fps)
+    v = hspeed(Po[:, ti[0]], fps) + hspeed(Po[:, ti[1]], fps)
+    m["still_feet"] = (v[st].sum() / 2, int(st.sum()))
+    m["frames"] = (n, 1)
+    return m
+
+
+def run_demo(demo, src, out, model, extra, trackers_out=None):
+    cmd = [demo, src, "-o", out, "--quiet", "--model", model] + extra
+    if trackers_out:
+        cmd += ["--trackers-out", trackers_out]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    return r.returncode, r.stdout + r.stderr
+
+
+def mode_inputs(mode, val_dir, every, tmp):
+    """(source files, demo options, truth files) of a mode."""
+    files = sorted(glob.glob(os.path.join(val_dir, "*.bvh")))[::every]
+    if mode == "nominal":
+        return files, [], files
+    if mode in ("devices", "csv"):
+        return files, ["--devices"], files
+    if mode == "cmu":
+        return [f for f in CMU if os.path.exists(f)], [], [f for f in CMU if os.path.exists(f)]
+    from . import bodies
+    d = os.path.join(tmp, mode)
+    if not os.path.isdir(d):
+        bodies.main([val_dir, d, "--preset", mode, "--every", str(every)])
+    f2 = sorted(glob.glob(os.path.join(d, "*.bvh")))
+    return f2, ["--devices"], f2
+
+
+def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None):
+    src, opts, truth = mode_inputs(mode, val_dir, every, tmp)
+    tot, fails = {}, []
+    for s, t in zip(src, truth):
+        out = os.path.join(tmp, "out.bvh")
+        if mode == "csv":
+            csv = os.path.join(tmp, "session.csv")
+            rc, log = run_demo(demo, s, os.path.join(tmp, "unused.bvh"), model, opts + extra, trackers_out=csv)
+            if rc != 0:
+                fails.append((s, log.strip().splitlines()[-1:]))
+                continue
+            rc, log = run_demo(demo, csv, out, model, extra)
+        else:
+            rc, log = run_demo(demo, s, out, model, opts + extra)
+        if rc != 0:
+            fails.append((s, log.strip().splitlines()[-1:]))
+            continue
+        m = compare(out, t)
+        if m is None:
+            continue
+        if per_clip is not None:
+            per_clip.append({"clip": os.path.basename(t), "mode": mode, "model": model,
+                             **{k: (v[0] / v[1] if v[1] else None) for k, v in m.items()}})
+        for k, (a, b) in m.items():
+            x = tot.setdefault(k, [0.0, 0])
+            x[0] += a
+            x[1] += b
+    res = {k: (a / b if b else float("nan")) for k, (a, b) in tot.items()}
+    res["frames"] = tot.get("frames", [0, 0])[0]
+    res["clips"] = len(src) - len(fails)
+    res["failed"] = len(fails)
+    return res, fails
+
+
+def main(argv=None):
+    argv = list(sys.argv[1:] if argv is None else argv)
+    extra = []
+    if "--" in argv:
+        extra = argv[argv.index("--") + 1:]
+        argv = argv[:argv.index("--")]
+    p = argparse.ArgumentParser(prog="weights_tool.offdist", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("demo")
+    p.add_argument("val_dir")
+    p.add_argument("--modes", nargs="+", default=["nominal", "devices", "s155", "s190", "longlegs", "shortlegs",
+                                                   "csv", "cmu"])
+    p.add_argument("--models", nargs="+", default=["lobstr", "n3p"])
+    p.add_argument("--every", type=int, default=5)
+    p.add_argument("--json", default=None)
+    p.add_argument("--tmp", default=None, help="folder for the retargeted clips and outputs (kept)")
+    a = p.parse_args(argv)
+    tmp = a.tmp or tempfile.mkdtemp(prefix="offdist")
+    os.makedirs(tmp, exist_ok=True)
+    results, clips = [], []
+    print(f"{'model':7s} {'mode':10s} {'clips':>5s} {'MPJPE':>7s} {'lower':>7s} {'toe':>7s} {'head':>7s} "
+          f"{'skate':>7s} {'still':>7s}   (cm, cm/s)")
+    for model in a.models:
+        for mode in a.modes:
+            r, fails = evaluate(a.demo, a.val_dir, mode, model, a.every, extra, tmp, clips)
+            r.update(model=model, mode=mode)
+            results.append(r)
+            c = lambda k: 100 * r.get(k, float("nan"))
+            print(f"{model:7s} {mode:10s} {r['clips']:5d} {c('mpjpe'):7.2f} {c('lower'):7.2f} {c('toe'):7.2f} "
+                  f"{c('head'):7.2f} {c('skate'):7.2f} {c('still_feet'):7.2f}" +
+                  (f"   {len(fails)} failed: {fails[0]}" if fails else ""), flush=True)
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump({"summary": results, "clips": clips, "demo_options": extra}, f, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
