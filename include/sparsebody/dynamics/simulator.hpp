@@ -90,9 +90,16 @@ class Simulator {
   const VecQ& q() const { return q_; }
   const VecV& v() const { return v_; }
   const VecV& last_acceleration() const { return qdd_; }
+  // A new state (start, reset, teleport): the last step's contacts no longer describe it, so the
+  // contact warm start and the failure rollback start from here (a reset is a clean start, and the
+  // same state gives the same steps whatever ran before: tests/questsim/test_determinism.cpp).
   void set_state(const VecQ& q, const VecV& v) {
     q_ = q;
     v_ = v;
+    q_prev_ = q_;
+    v_prev_ = v_;
+    nc_ = 0;
+    current_ = 0;
     refresh_kinematics();
   }
   // PD targets in the configuration layout (quaternions for spherical joints, angles for revolute).
