@@ -16,7 +16,9 @@ Per clip (`Augment`): stature 1.5-1.95 m with independent leg / torso / arm rati
 scaled with the legs so the feet stay on the floor; playback speed 0.8-1.2x (local rotations resampled,
 root translation interpolated); eye offset +-2 cm per axis; grip offsets 5-12 cm long, direction within
 30 deg of nominal; calibration error up to 10 deg (headset, pelvis) / 25 deg (controllers); a belt
-tracker up to 4 cm off the hips joint; per-frame timing jitter (2 ms: the resampler interpolates 72-90 Hz
+tracker up to 4 cm off the hips joint, then moved along its up axis so that at the calibration frame
+it sits at the standard standing hips height (the runtime's pelvis calibration: belt placement and
+proportions do not read as a crouch); per-frame timing jitter (2 ms: the resampler interpolates 72-90 Hz
 samples at jittered times, an error of v * dt) and short tracking losses (1-6 model frames, ~1 per 10 s
 per controller) held as the sanitizer holds them (trackers/sanitizer.hpp). Mirroring is not done.
 """
@@ -137,6 +139,10 @@ def device_trackers(clip, aug, noise=True):
     P[:, 3] += np.einsum("fij,j->fi", Q[:, 3], aug.belt)
     Q = Qe
     s = STANDARD["standing_head_height"] / max(eye_y - EYE[1], 0.3) * aug.scale_err
+    # the runtime calibration puts a belt tracker at the standard standing hips height (in the
+    # standard scale) at the calibration frame: an offset along the calibrated pelvis's up axis
+    d = np.array([0.0, P[0, 3, 1] - STANDARD["standing_hips_height"] / s, 0.0])
+    P[:, 3] -= np.einsum("fij,j->fi", Q[:, 3], d)
     if noise:
         P, Q = add_tracker_noise(rng, P, Q)
     if aug.devices:

@@ -36,7 +36,7 @@ def clip_arrays(clip, rng=None, offset_deg=0.0, scale_jitter=0.0):
     return X.astype(np.float32), Y.astype(np.float32), C
 
 
-def clip_arrays_devices(clip, rng):
+def clip_arrays_devices(clip, rng, return_clip=False):
     """Features, targets and contacts of one clip on a random body at a random speed, with trackers
     placed like real devices (weights_tool/devices.py)."""
     from .. import devices
@@ -47,6 +47,8 @@ def clip_arrays_devices(clip, rng):
     idx = [c.bvh.index(n) for n in LOWER]
     Y = to6d(c.R_local[:, idx]).reshape(c.frames, 48)
     C = contact_labels(c, c.floor())
+    if return_clip:
+        return X.astype(np.float32), Y.astype(np.float32), C, c
     return X.astype(np.float32), Y.astype(np.float32), C
 
 

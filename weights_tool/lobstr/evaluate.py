@@ -26,6 +26,14 @@ from .skeleton import LOWER, Clip, contact_labels
 
 
 def load_model(path):
+    if path.endswith(".json"):  # an exported weights file
+        from ..format import read_weights
+        doc, tensors, norm = read_weights(path)
+        cfg = {"hidden": doc["meta"]["hidden"], "latent": doc["meta"]["latent"]}
+        m = LoBSTrNet(hidden=cfg["hidden"], latent=cfg["latent"])
+        m.load_state_dict({k: torch.from_numpy(v).float() for k, v in tensors.items()})
+        m.eval()
+        return m, norm["input_mean"].astype(np.float32), norm["input_std"].astype(np.float32), cfg
     ck = torch.load(path, map_location="cpu")
     cfg = ck["config"]
     m = LoBSTrNet(hidden=cfg["hidden"], latent=cfg["latent"])
@@ -73,7 +81,7 @@ def clip_metrics(clip, Yp, C):
                 skate=skate, skate_gt=skate_gt, n_on=on.sum(), n_on_gt=(C[1:] == 1).sum())
 
 
-def evaluate(model_path, data_dir, window=None, limit=None, seed=1, every=1):
+def evaluate(model_path, data_dir, window=None, limit=None, seed=1, every=1, devices=False):
     model, mean, std, cfg = load_model(model_path)
     rng = np.random.default_rng(seed)
     files = sorted(glob.glob(os.path.join(data_dir, "*.bvh")))[::every]
@@ -84,7 +92,11 @@ def evaluate(model_path, data_dir, window=None, limit=None, seed=1, every=1):
         clip = Clip(f)
         if clip.frames < 8:
             continue
-        X, _, C = clip_arrays(clip, rng)
+        if devices:  # a random body with device-realistic trackers (weights_tool/devices.py)
+            from .dataset import clip_arrays_devices
+            X, _, C, clip = clip_arrays_devices(clip, rng, return_clip=True)
+        else:
+            X, _, C = clip_arrays(clip, rng)
         Yp = predict(model, mean, std, X, window)
         rows.append(clip_metrics(clip, Yp, C))
     w = np.array([r["frames"] for r in rows], float)
@@ -104,10 +116,11 @@ def main(argv=None):
     p.add_argument("--limit", type=int)
     p.add_argument("--every", type=int, default=1, help="use every n-th clip")
     p.add_argument("--threads", type=int, default=1)
+    p.add_argument("--devices", action="store_true", help="random bodies and device-realistic trackers")
     a = p.parse_args(argv)
     torch.set_num_threads(a.threads)
-    avg, cfg = evaluate(a.checkpoint, a.data_dir, a.window or None, a.limit, every=a.every)
-    mode = f"window ({a.window} frames)" if a.window else "streaming"
+    avg, cfg = evaluate(a.checkpoint, a.data_dir, a.window or None, a.limit, every=a.every, devices=a.devices)
+    mode = (f"window ({a.window} frames)" if a.window else "streaming") + (", device-realistic" if a.devices else "")
     print(f"LoBSTr H={cfg['hidden']} latent={cfg['latent']}, {mode}, {avg['clips']} clips, {avg['frames']} frames "
           f"of {a.data_dir}")
     print(f"  contact accuracy     {100 * avg['contact']:6.2f} %     (paper GRU: 85.77 %)")
