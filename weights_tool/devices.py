@@ -141,7 +141,7 @@ def device_trackers(clip, aug, noise=True):
     s = STANDARD["standing_head_height"] / max(eye_y - EYE[1], 0.3) * aug.scale_err
     # the runtime calibration puts a belt tracker at the standard standing hips height (in the
     # standard scale) at the calibration frame: an offset along the calibrated pelvis's up axis
-    d = np.array([0.0, P[0, 3, 1] - STANDARD["standing_hips_height"] / s, 0.0])
+    d = Q[0, 3].T @ np.array([0.0, P[0, 3, 1] - STANDARD["standing_hips_height"] / s, 0.0])
     P[:, 3] -= np.einsum("fij,j->fi", Q[:, 3], d)
     if noise:
         P, Q = add_tracker_noise(rng, P, Q)

@@ -71,9 +71,10 @@ def still_mask(truth, P, fps, speed=0.05, seconds=0.5):
     return out
 
 
-def compare(out_bvh, truth_bvh, truth_units=None):
-    """Per-frame sums of the metrics of one run (dict of (sum, count))."""
-    out, truth = Clip(out_bvh, units=0.01), Clip(truth_bvh, units=truth_units)
+def compare(out_bvh, truth_bvh, truth_units=None, out_units=0.01):
+    """Per-frame sums of the metrics of one run (dict of (sum, count)). The demo writes centimetres;
+    the clip's units are guessed from its leg length unless given."""
+    out, truth = Clip(out_bvh, units=out_units), Clip(truth_bvh, units=truth_units)
     fps = truth.fps
     n = min(out.frames, truth.frames)
     if n < 2:

@@ -1,0 +1,89 @@
+"""Device-realistic synthesis (weights_tool/devices.py), retargeted bodies (bodies.py) and the
+off-distribution comparator (offdist.py), on a CMU clip from Debian's assimp-testmodels."""
+import os
+
+import numpy as np
+import pytest
+
+from weights_tool import bodies, devices, offdist
+from weights_tool.lobstr.skeleton import Clip
+
+CMU = "/usr/share/assimp/models/BVH/01_01.bvh"
+pytestmark = pytest.mark.skipif(not os.path.exists(CMU), reason="assimp-testmodels not installed")
+
+
+def short_clip(tmp_path, frames=120):
+    """The first `frames` frames of the CMU clip as a BVH file (keeps the tests fast)."""
+    text = open(CMU).read()
+    head, motion = text.split("MOTION", 1)
+    lines = motion.strip().splitlines()
+    out = tmp_path / "short.bvh"
+    out.write_text(head + "MOTION\nFrames: %d\n%s\n" % (frames, lines[1]) + "\n".join(lines[2:2 + frames]) + "\n")
+    return str(out)
+
+
+def test_nominal_devices_are_the_joint_trackers_and_scale(tmp_path):
+    clip = Clip(short_clip(tmp_path))
+    aug = devices.Augment(np.random.default_rng(0), body=False, speed=False, devices=False)
+    P, Q, s = devices.device_trackers(clip, aug, noise=False)
+    P0, Q0 = clip.trackers()
+    P0 = P0.copy()
+    P0[..., 1] -= clip.floor()
+    np.testing.assert_allclose(P[:, :3], P0[:, :3], atol=1e-12)   # nominal offsets cancel exactly
+    np.testing.assert_allclose(Q, Q0, atol=1e-12)
+    head_joint = P0[0, 0, 1]
+    assert s == pytest.approx(devices.STANDARD["standing_head_height"] / head_joint)
+    # the belt tracker lands at the standard standing hips height at the calibration frame
+    assert P[0, 3, 1] * s == pytest.approx(devices.STANDARD["standing_hips_height"])
+
+
+def test_device_offsets_and_losses(tmp_path):
+    clip = Clip(short_clip(tmp_path))
+    rng = np.random.default_rng(3)
+    aug = devices.Augment(rng, body=False, speed=False)
+    P, Q, s = devices.device_trackers(clip, aug, noise=False)
+    P0, _ = clip.trackers()
+    d = np.linalg.norm(P[:, :3] - (P0[:, :3] - [0, clip.floor(), 0]), axis=-1)
+    # residual of the user's offsets after the nominal ones are taken off: a few cm, never more than
+    # the offsets' ranges allow (eye +-2 cm per axis, grip 12 cm + nominal 8.5 cm, plus jitter)
+    # (a short loss holds a controller where it was: those frames are further off)
+    assert np.median(d[:, 0]) < 0.05 and np.median(d[:, 1:]) < 0.15
+    assert np.all(np.isfinite(P)) and np.all(np.isfinite(Q))
+
+
+def test_scaled_body_keeps_feet_on_floor_and_scales_stature(tmp_path):
+    clip = Clip(short_clip(tmp_path))
+    for st in (1.55, 1.90):
+        aug = devices.Augment(np.random.default_rng(1), body=False, speed=False, devices=False)
+        aug.stature = st
+        big = devices.scale_body(clip, aug)
+        k = st / devices.STANDARD_STATURE
+        assert big.leg == pytest.approx(clip.leg * k)
+        h0 = clip.pw[0, clip.roles["head"], 1] - clip.floor()
+        h1 = big.pw[0, big.roles["head"], 1] - big.floor()
+        assert h1 == pytest.approx(h0 * k, rel=0.01)
+
+
+def test_retime_changes_length_not_pose_range(tmp_path):
+    clip = Clip(short_clip(tmp_path))
+    fast = devices.retime(clip, 1.2)
+    assert fast.frames == int(np.floor((clip.frames - 1) / 1.2)) + 1
+    R = fast.R_local
+    np.testing.assert_allclose(R @ np.swapaxes(R, -1, -2), np.broadcast_to(np.eye(3), R.shape), atol=1e-9)
+
+
+def test_bodies_bvh_and_offdist_compare(tmp_path):
+    src = short_clip(tmp_path)
+    out = tmp_path / "big"
+    os.makedirs(out)
+    with open(src) as f:
+        # (the leg / torso / arm ratios apply to the standard skeleton's joint names; a CMU clip scales as a whole)
+        (out / "short.bvh").write_text(bodies.scale_text(f.read(), src, 1.90))
+    a = Clip(src)
+    b = Clip(str(out / "short.bvh"), units=a.units)
+    k = 1.90 / devices.STANDARD_STATURE
+    assert b.leg == pytest.approx(a.leg * k, rel=1e-4)
+    m = offdist.compare(str(out / "short.bvh"), str(out / "short.bvh"), truth_units=0.01, out_units=0.01)
+    assert m["mpjpe"][0] / m["mpjpe"][1] < 1e-3   # the same clip: no error (the comparator is exact)
+    m2 = offdist.compare(src, str(out / "short.bvh"), truth_units=0.01, out_units=0.01)
+    assert m2["mpjpe"][0] / m2["mpjpe"][1] > 0.01  # a different body: an error the comparator sees
