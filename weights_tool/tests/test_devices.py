@@ -83,9 +83,9 @@ def test_bodies_bvh_and_offdist_compare(tmp_path):
     b = Clip(str(out / "short.bvh"), units=a.units)
     k = 1.90 / devices.STANDARD_STATURE
     assert b.leg == pytest.approx(a.leg * k, rel=1e-4)
-    m = offdist.compare(str(out / "short.bvh"), str(out / "short.bvh"), truth_units=0.01, out_units=0.01)
+    m = offdist.compare(str(out / "short.bvh"), str(out / "short.bvh"), truth_units=a.units, out_units=a.units)
     # the same clip: the only difference is the floor the comparator takes off the clip (the demo's
     # output has its floor at y = 0 already)
     assert m["mpjpe"][0] / m["mpjpe"][1] == pytest.approx(abs(b.floor()), abs=1e-9)
-    m2 = offdist.compare(src, str(out / "short.bvh"), truth_units=0.01, out_units=0.01)
+    m2 = offdist.compare(src, str(out / "short.bvh"), truth_units=a.units, out_units=a.units)
     assert m2["mpjpe"][0] / m2["mpjpe"][1] > 0.01  # a different body: an error the comparator sees
