@@ -174,6 +174,15 @@ class N3PPredictor {
     std::copy(s.ostar, s.ostar + n3p::kO, ostar_); std::copy(s.z, s.z + n3p::kZ, z_); std::copy(s.zstar, s.zstar + n3p::kZ, zstar_);
   }
 
+  // Moves the heading frame h^t (and with it the whole predicted body) by (dx, 0, dz) in the world:
+  // the direct-mode head anchor (avatar/n3p_direct.hpp) keeps the integrated heading from drifting
+  // away from the headset. Not part of the paper's predictor (Eq. (2) only integrates dh).
+  void shift(double dx, double dz) noexcept {
+    h_.px += dx;
+    h_.pz += dz;
+    pose_.root_position += Eigen::Vector3d(dx, 0.0, dz);
+  }
+
   // --- results (valid after a successful step) ----------------------------------------------
   const pose::BodyPose& pose() const noexcept { return pose_; }          // standard skeleton, metres
   const Eigen::Matrix3d& world_rotation(int joint) const noexcept { return R_[joint]; }
