@@ -16,6 +16,7 @@ TEST_CASE("n3p physics: no allocation per frame") {
     avatar::N3PPhysicsConfig c;
     if (falls) c.fall.min_height = 5.0;  // every frame resets the character
     Physics p(n3p_physics_test::weights(), c);
+    p.set_calibration({});  // synthetic users: trackers at the joints, body convention
     std::vector<trackers::TrackerFrame> frames;
     for (int t = 0; t < 240; ++t) frames.push_back(n3p_physics_test::user_frame(t, 1.0));
     frames[40].pose[0].position.x = std::numeric_limits<float>::quiet_NaN();
@@ -42,6 +43,7 @@ TEST_CASE("n3p physics: no allocation per frame") {
 TEST_CASE("n3p physics: no allocation per simulation step (controller + correction + step)") {
   using n3p_physics_test::Physics;
   Physics p(n3p_physics_test::weights());
+  p.set_calibration({});  // synthetic users: trackers at the joints, body convention
   const auto& m = p.model();
   dynamics::Simulator<float, 24, 72> sim(m);
   control::ModelBasedController<float, 24, 72> ctl(m);

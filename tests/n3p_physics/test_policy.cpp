@@ -99,6 +99,7 @@ TEST_CASE("n3p physics policy path: runs, recovers from falls, no allocation per
   REQUIRE_MESSAGE(probe.good(), "run the parity test case first (it writes the random policy)");
   const auto w = Physics::load(SPARSEBODY_N3P_WEIGHTS);
   Physics p(w, Physics::ControlPredictor::load_policy(dir + "/n3p_policy_random.json"));
+  p.set_calibration({});  // synthetic users: trackers at the joints, body convention
   CHECK(p.controller_kind() == avatar::ControllerKind::Policy);
   auto frame = [](int t) {
     trackers::TrackerFrame f;
