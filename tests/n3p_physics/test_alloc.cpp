@@ -7,6 +7,7 @@
 
 #include "n3p_physics/common.hpp"
 #include "support/alloc_counter.hpp"
+#include "support/standing_stream.hpp"
 
 using namespace sparsebody;
 
@@ -69,4 +70,29 @@ TEST_CASE("n3p physics: no allocation per simulation step (controller + correcti
     n = counter.count();
   }
   CHECK(n == 0);
+}
+
+// The automatic calibration inside push(): a standing window found mid-stream changes the
+// calibration, which restarts the physics (the reference changes size); nothing allocates.
+TEST_CASE("n3p physics: automatic calibration restarts the physics and allocates nothing") {
+  using n3p_physics_test::Physics;
+  using sparsebody_test::Phase;
+  const auto frames = sparsebody_test::session({{Phase::Walk, 1.0, 1.70}, {Phase::Stand, 2.5, 1.70}, {Phase::Walk, 1.0, 1.70},
+                                                {Phase::Stand, 2.5, 1.60}, {Phase::Walk, 1.0, 1.60}},
+                                               72.0, 0.3, false);
+  Physics p(n3p_physics_test::weights());
+  for (int t = 0; t < 6; ++t) p.push(frames[static_cast<std::size_t>(t)]);
+  const long long restarts = p.restarts();
+  long long n = 0;
+  {
+    sparsebody_test::AllocationCounter counter;
+    for (std::size_t t = 6; t < frames.size(); ++t) p.push(frames[t]);
+    n = counter.count();
+  }
+  CHECK(n == 0);
+  CHECK(p.calibration_report().status == features::CalibrationStatus::Calibrated);
+  CHECK(p.calibration_report().skipped == 1);
+  CHECK(p.restarts() == restarts + 1);  // once, when the standing window was accepted
+  CHECK(p.has_output());
+  CHECK(n3p_physics_test::finite_output(p));
 }
