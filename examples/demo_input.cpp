@@ -97,6 +97,7 @@ void read_input(const Options& o, Input& in) {
   in.have_truth = ends_with(o.input, ".bvh") || ends_with(o.input, ".BVH");
   if (in.have_truth) read_bvh(o, in);
   else read_csv(o, in);
+  if (!in.have_truth && o.devices) std::printf("note    --devices synthesises trackers from a BVH clip; a CSV is used as recorded\n");
   constexpr int kPelvis = static_cast<int>(trackers::Tracker::Pelvis);
   if (o.no_pelvis)
     for (auto& f : in.frames) f.valid[kPelvis] = false;

@@ -177,6 +177,7 @@ TEST_CASE("n3p physics: a fall resets the character to the predicted pose and th
   c2.controller.max_force = 0;  // no help at all: it must fall while walking, and be put back
   c2.controller.max_torque = 0;
   Physics q(n3p_physics_test::weights(), c2);
+  q.set_calibration({});  // synthetic users: trackers at the joints, body convention
   for (int t = 0; t < 300; ++t) {
     q.push(user_frame(t, 1.2));
     if (!q.has_output()) continue;
