@@ -54,9 +54,9 @@ TEST_CASE("auto calibration: standing still 2 s then walking is calibrated from 
   CHECK(r.first_time >= 0.0);
   CHECK(r.last_time <= 2.0);
   CHECK(r.last_time - r.first_time >= 1.0 - 1e-9);
-  CHECK(r.eye_height == doctest::Approx(1.65).epsilon(0.002));
-  CHECK(r.stature == doctest::Approx(1.65 / 0.936).epsilon(0.002));
-  CHECK(f.cal.calibration().scale == doctest::Approx(kStdHead / (1.65 - 0.08)).epsilon(0.002));
+  CHECK(r.eye_height == doctest::Approx(1.65).epsilon(0.002).scale(0));
+  CHECK(r.stature == doctest::Approx(1.65 / 0.936).epsilon(0.002).scale(0));
+  CHECK(f.cal.calibration().scale == doctest::Approx(kStdHead / (1.65 - 0.08)).epsilon(0.002).scale(0));
   CHECK(r.confidence > 0.4);
   CHECK(r.confidence <= 0.7 + 1e-9);  // one window
   CHECK(std::string(r.message).find("automatic: standing at") == 0);
@@ -79,7 +79,7 @@ TEST_CASE("auto calibration: walking from frame 0, standing at 5 s") {
   }
   CHECK(f.r().status == features::CalibrationStatus::Calibrated);
   CHECK(f.r().first_time >= 5.0 - 1e-9);
-  CHECK(f.r().stature == doctest::Approx(1.70 / 0.936).epsilon(0.002));
+  CHECK(f.r().stature == doctest::Approx(1.70 / 0.936).epsilon(0.002).scale(0));
 }
 
 TEST_CASE("auto calibration: refinement - higher replaces, same is averaged, lower (sitting) is skipped") {
@@ -98,7 +98,7 @@ TEST_CASE("auto calibration: refinement - higher replaces, same is averaged, low
   CHECK(r.windows == 2);
   CHECK(r.skipped == 1);
   CHECK(f.changes == 3);
-  CHECK(r.eye_height == doctest::Approx(1.665).epsilon(0.002));
+  CHECK(r.eye_height == doctest::Approx(1.665).epsilon(0.002).scale(0));
   CHECK(r.confidence > 0.7);  // two agreeing windows
   CHECK(std::string(r.message).find("1 lower") != std::string::npos);
 }
@@ -181,7 +181,7 @@ TEST_CASE("auto calibration: recalibrate() forgets and searches again; explicit 
   CHECK(f.cal.calibration().scale == 1.0);
   f.feed(sparsebody_test::session({{Phase::Stand, 2.0, 1.55}, {Phase::Walk, 1.0, 1.55}}));  // another user
   CHECK(f.r().status == features::CalibrationStatus::Calibrated);
-  CHECK(f.r().stature == doctest::Approx(1.55 / 0.936).epsilon(0.002));
+  CHECK(f.r().stature == doctest::Approx(1.55 / 0.936).epsilon(0.002).scale(0));
   // an explicit frame: used as given, no more automatic changes
   const auto one = sparsebody_test::session({{Phase::Stand, 0.1, 1.70}})[0];
   REQUIRE(f.cal.calibrate_from(one));
@@ -204,7 +204,7 @@ TEST_CASE("auto calibration: estimate_floor puts the floor under the standing ey
   const auto& r = f.r();
   REQUIRE(r.status == features::CalibrationStatus::Calibrated);
   CHECK(r.floor_estimated);
-  CHECK(r.floor == doctest::Approx(1.62 + 0.9 - 0.936 * 1.70).epsilon(0.002));
+  CHECK(r.floor == doctest::Approx(1.62 + 0.9 - 0.936 * 1.70).epsilon(0.002).scale(0));
   CHECK(r.stature == doctest::Approx(1.70));
   CHECK(std::string(r.message).find("floor estimated") != std::string::npos);
 }
@@ -229,7 +229,7 @@ TEST_CASE("LoBSTr pipeline: automatic by default, the calibration change restart
   }
   CHECK(changed_seen);
   CHECK(p.calibration_report().status == features::CalibrationStatus::Calibrated);
-  CHECK(p.user_scale() == doctest::Approx((1.75 - 0.08) / p.meta().standing_head_height).epsilon(0.003));
+  CHECK(p.user_scale() == doctest::Approx((1.75 - 0.08) / p.meta().standing_head_height).epsilon(0.003).scale(0));
   p.recalibrate();
   CHECK(p.calibration_report().status == features::CalibrationStatus::Default);
   CHECK(p.user_scale() == 1.0);

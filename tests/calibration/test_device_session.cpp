@@ -144,17 +144,19 @@ void check_pipeline(const W& weights, C cfg, const char* name, double max_standi
   CHECK(p.calibration_report().status == features::CalibrationStatus::Default);
   const HeadError e = run(p, s.devices.frames, features::DeviceModel{});
   const auto& r = p.calibration_report();
-  MESSAGE(name << ": " << r.message);
+  MESSAGE(std::string(name) + ": " + r.message);
   REQUIRE(r.status == features::CalibrationStatus::Calibrated);
   CHECK(r.first_time >= 7.5);  // the stand (the clip's own moments before it are not still)
   CHECK(r.last_time <= 10.8 + 1e-9);
   Eigen::Vector3d h, top;
   Eigen::Quaterniond R;
   clip_head(s, 9.0, h, top, R);
-  // true stature: the top of the head (the clip's Head end site) standing
+  // The clip's true stature: the top of its head (the Head end site) standing. (CMU's end site is
+  // only 10 cm above its head joint, below the vertex: the estimate comes out 4.5 % above it.)
   MESSAGE("stature " << r.stature << " m, clip head top " << top.y() << " m, head joint " << h.y() << " m");
-  CHECK(r.stature == doctest::Approx(top.y()).epsilon(0.05));
-  CHECK(r.eye_height == doctest::Approx(h.y() + 0.08).epsilon(0.02));
+  CHECK(std::abs(r.stature / top.y() - 1) < 0.05);
+  // the window's eye height is the clip's standing head joint + e.y (the median of a still window)
+  CHECK(std::abs(r.eye_height - (h.y() + 0.08)) < 0.02);
   // the same motion with trackers at the joints and the clip's size given: the pipeline's own head error
   P q(weights, cfg);
   features::Calibration at_joints;
@@ -182,4 +184,29 @@ TEST_CASE("device-realistic CMU session: LoBSTr calibrates automatically (statur
 TEST_CASE("device-realistic CMU session: Neural3Points calibrates automatically (stature, head on the eye offset)") {
   avatar::N3PConfig cfg;
   check_pipeline<avatar::N3PDirect>(avatar::N3PDirect::load(kDir + "/n3p"), cfg, "n3p", 0.03);
+}
+
+TEST_CASE("device-realistic CMU session with a perturbed device fit and timing jitter still calibrates") {
+  const Session& s = session();
+  Eigen::Vector3d h, top;
+  Eigen::Quaterniond R;
+  clip_head(s, 9.0, h, top, R);
+  for (unsigned seed : {1u, 2u, 3u}) {
+    INFO("seed " << seed);
+    recordings::DeviceSynthesis opt;
+    opt.perturb = true;
+    opt.seed = seed;
+    opt.timing_jitter = 0.002;
+    const auto frames = recordings::synthesize_device_trackers(s.clip, s.map, s.units, opt).frames;
+    avatar::N3PDirect p(avatar::N3PDirect::load(kDir + "/n3p"));
+    for (const auto& f : frames) p.push(f);
+    const auto& r = p.calibration_report();
+    MESSAGE("seed " << seed << ": " << r.message);
+    REQUIRE(r.status == features::CalibrationStatus::Calibrated);
+    // the eye offset varies by +-2 cm per axis: within 3 cm of the nominal eye height, and the
+    // stature within 5 % of the one the nominal device model gives for this clip
+    CHECK(std::abs(r.eye_height - (h.y() + 0.08)) < 0.03);
+    CHECK(std::abs(r.stature / ((h.y() + 0.08) / 0.936) - 1) < 0.05);
+    MESSAGE("stature / clip head top = " << r.stature / top.y());
+  }
 }
