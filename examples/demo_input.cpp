@@ -1,5 +1,7 @@
 #include "demo_input.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
@@ -19,15 +21,36 @@ bool ends_with(const std::string& s, const char* e) {
 
 void read_bvh(const Options& o, Input& in) {
   in.clip = recordings::read_bvh(o.input);
+  if (o.devices_stand >= 0) {
+    in.clip = recordings::with_held_frame(std::move(in.clip), o.devices_stand, 2.5);
+    std::printf("stand   the clip's frame at %.2f s held for 2.5 s (--devices-stand): a standing window\n", o.devices_stand);
+  }
   const pose::JointMap map = pose::JointMap::from_names(in.clip.skeleton, o.input);
   const double units = recordings::guess_units(in.clip.skeleton, map);
-  recordings::SyntheticTrackers syn = recordings::synthesize_trackers(in.clip, map, units);
+  recordings::SyntheticTrackers syn;
+  if (o.devices) {  // what a headset session of this motion would record: calibrated automatically
+    recordings::DeviceSynthesis d;
+    d.rate = 72;
+    if (o.device_seed > 0) {
+      d.perturb = true;
+      d.seed = o.device_seed;
+      d.timing_jitter = 0.002;
+      d.losses_per_second = 0.2;
+    }
+    syn = recordings::synthesize_device_trackers(in.clip, map, units, d);
+  } else {
+    syn = recordings::synthesize_trackers(in.clip, map, units);
+  }
   in.frames = std::move(syn.frames);
+  in.at_joints = !o.devices;
   in.leg = syn.leg;
   in.truth.init(in.clip, map, units, syn.floor);
-  in.fps = 1.0 / in.clip.frame_time;
-  std::printf("input   %s: %d frames at %.1f fps, %d joints, units %.4g m, leg %.3f m\n", o.input.c_str(), in.clip.frames, in.fps,
-              in.clip.skeleton.size(), units, syn.leg);
+  in.fps = o.devices ? 72.0 : 1.0 / in.clip.frame_time;
+  std::printf("input   %s: %d frames at %.1f fps, %d joints, units %.4g m, leg %.3f m\n", o.input.c_str(), in.clip.frames,
+              1.0 / in.clip.frame_time, in.clip.skeleton.size(), units, syn.leg);
+  if (o.devices)
+    std::printf("devices %zu device frames at 72 Hz: headset at the eyes, grips off the wrists, OpenXR orientations%s\n",
+                in.frames.size(), o.device_seed > 0 ? ", per-session perturbation, 2 ms jitter, short losses" : "");
 }
 
 void read_csv(const Options& o, Input& in) {
@@ -39,10 +62,14 @@ void read_csv(const Options& o, Input& in) {
 
 void write_trackers(const Options& o, const Input& in) {
   auto xr = in.frames;
-  if (in.have_truth) recordings::to_openxr_convention(xr);
-  recordings::write_tracker_csv(o.trackers_out, xr,
-                                in.have_truth ? "synthesised from " + o.input + "; T-pose calibration frame 0" : "copy of " + o.input);
-  std::printf("wrote   %s (%s trackers, OpenXR convention)\n", o.trackers_out.c_str(), in.have_truth ? "synthesised" : "input");
+  if (in.at_joints) recordings::to_openxr_convention(xr);
+  const std::string what = !in.have_truth ? "copy of " + o.input
+                           : in.at_joints ? "synthesised from " + o.input + " at the joints; T-pose calibration frame 0"
+                                          : "device-realistic session synthesised from " + o.input +
+                                                ": 72 Hz, headset eye offset, controller grip offsets, no T-pose, floor y = 0";
+  recordings::write_tracker_csv(o.trackers_out, xr, what);
+  std::printf("wrote   %s (%s trackers, OpenXR convention)\n", o.trackers_out.c_str(),
+              !in.have_truth ? "input" : in.at_joints ? "synthesised" : "device-realistic");
 }
 }  // namespace
 
@@ -58,10 +85,19 @@ void Truth::at(int frame) {
   for (auto& p : w.position) p.y() -= floor;
 }
 
+long frame_at(const Input& in, double t) {
+  const auto it = std::lower_bound(in.frames.begin(), in.frames.end(), t,
+                                   [](const trackers::TrackerFrame& f, double x) { return f.time < x; });
+  long i = static_cast<long>(it - in.frames.begin());
+  if (i > 0 && (i == static_cast<long>(in.frames.size()) || std::abs(in.frames[i - 1].time - t) <= std::abs(in.frames[i].time - t))) --i;
+  return i;
+}
+
 void read_input(const Options& o, Input& in) {
   in.have_truth = ends_with(o.input, ".bvh") || ends_with(o.input, ".BVH");
   if (in.have_truth) read_bvh(o, in);
   else read_csv(o, in);
+  if (!in.have_truth && o.devices) std::printf("note    --devices synthesises trackers from a BVH clip; a CSV is used as recorded\n");
   constexpr int kPelvis = static_cast<int>(trackers::Tracker::Pelvis);
   if (o.no_pelvis)
     for (auto& f : in.frames) f.valid[kPelvis] = false;

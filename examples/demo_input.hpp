@@ -30,6 +30,7 @@ struct Input {
   sparsebody::recordings::BvhClip clip;
   Truth truth;
   bool have_truth = false;
+  bool at_joints = false;  // trackers synthesised at the joints (BVH without --devices): sized by leg length
   double leg = 0;  // BVH: the clip's leg length (m), to scale it to the standard skeleton
   double fps = 0;
   bool pelvis = false;  // any valid pelvis tracker frame
@@ -38,5 +39,8 @@ struct Input {
 // Reads o.input (printing what it found), drops the pelvis for --no-pelvis and writes
 // --trackers-out. Throws on a file that cannot be read.
 void read_input(const Options& o, Input& in);
+
+// The input frame nearest to time t (the pipelines report model-rate times).
+long frame_at(const Input& in, double t);
 
 }  // namespace demo

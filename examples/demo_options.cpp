@@ -20,9 +20,14 @@ void usage(const char* msg) {
                "%s\nusage: sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p] [--no-pelvis]\n"
                "                       [--weights FILE (LoBSTr) | DIR (Neural3Points: n3p_{signal,lower,upper}.json)]\n"
                "                       [--mode streaming|window] [--no-contact-ik] [--trackers-out trackers.csv]\n"
-               "                       [--calibration-frame N] [--storage float|f16|q8] [--physics] [--quiet]\n"
+               "                       [--calibration-frame N] [--devices [--device-seed S] [--devices-stand T]]\n"
+               "                       [--storage float|f16|q8]\n"
+               "                       [--physics] [--quiet]\n"
+               "calibration: automatic from standing windows (default); --calibration-frame N forces input frame N\n"
+               "             (a T-pose or an upright standing frame); BVH input without --devices is sized by leg length\n"
                "exit codes: 0 done; 1 the run failed (no usable calibration, a model the input cannot drive);\n"
-               "            2 bad command line, or an input or weights file that is missing or malformed\n",
+               "            2 bad command line (e.g. --calibration-frame outside the recording), or an input or\n"
+               "            weights file that is missing or malformed\n",
                msg);
   std::exit(2);
 }
@@ -53,7 +58,28 @@ Options parse_options(int argc, char** argv) {
       else usage("--mode must be streaming or window");
     } else if (a == "--no-contact-ik") o.contact_ik = false;
     else if (a == "--trackers-out") o.trackers_out = next();
-    else if (a == "--calibration-frame") o.calibration_frame = std::stoi(next());
+    else if (a == "--calibration-frame") {
+      const std::string v = next();
+      char* end = nullptr;
+      o.calibration_frame = std::strtol(v.c_str(), &end, 10);
+      if (v.empty() || *end != '\0') usage(("--calibration-frame expects a frame number, got '" + v + "'").c_str());
+      o.calibration_forced = true;
+    } else if (a == "--devices") o.devices = true;
+    else if (a == "--devices-stand") {
+      const std::string v = next();
+      char* end = nullptr;
+      o.devices_stand = std::strtod(v.c_str(), &end);
+      if (v.empty() || *end != '\0' || !(o.devices_stand >= 0)) usage(("--devices-stand expects seconds >= 0, got '" + v + "'").c_str());
+      o.devices = true;
+    }
+    else if (a == "--device-seed") {
+      const std::string v = next();
+      char* end = nullptr;
+      const unsigned long s = std::strtoul(v.c_str(), &end, 10);
+      if (v.empty() || *end != '\0' || s == 0) usage(("--device-seed expects a positive number, got '" + v + "'").c_str());
+      o.device_seed = static_cast<unsigned>(s);
+      o.devices = true;
+    }
     else if (a == "--quiet") o.quiet = true;
     else if (a == "-h" || a == "--help") usage("full-body avatar from sparse VR trackers (LoBSTr or Neural3Points)");
     else if (!a.empty() && a[0] == '-') usage(("unknown option " + a).c_str());

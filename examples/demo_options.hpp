@@ -14,7 +14,15 @@ struct Options {
   sparsebody::avatar::RunMode mode = sparsebody::avatar::RunMode::Streaming;
   bool contact_ik = true, quiet = false, no_pelvis = false, physics = false;
   std::string storage = default_storage();
-  int calibration_frame = 0;
+  // Calibration: automatic (standing windows) unless --calibration-frame N forces frame N.
+  bool calibration_forced = false;
+  long calibration_frame = -1;
+  // BVH input: device-realistic trackers (device offsets, OpenXR, 72 Hz; automatic calibration)
+  // instead of trackers at the joints sized by leg length; device_seed > 0 adds a per-session
+  // perturbation, 2 ms timing jitter and short losses.
+  bool devices = false;
+  unsigned device_seed = 0;
+  double devices_stand = -1;  // --devices-stand T: the clip's frame at T s held 2.5 s (a standing window)
 
   // q8 where this build has the AVX-512 VNNI kernel (the portable int8 path is exact but slow).
   static const char* default_storage() noexcept;

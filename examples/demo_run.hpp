@@ -1,6 +1,6 @@
 // sparsebody_demo's run of one pipeline over the input, the same for every pipeline (they share
 // the front end: push, has_output, pose, world, plus skeleton, joint_map, contact, user_scale,
-// calibrate and meta().frame_rate): fitting the user, the frame loop with its progress lines, the
+// calibrate, calibration_report and meta().frame_rate): fitting the user, the frame loop with its progress lines, the
 // output BVH, timing, and the metrics against the clip.
 #pragma once
 #include <chrono>
@@ -15,25 +15,56 @@
 
 namespace demo {
 
-// BVH input: the synthesised trackers are calibrated already, only the size differs, so
-// set_scale(s) gets the standard skeleton's / the clip's leg length. CSV input: T-pose calibration
-// on --calibration-frame. Prints which; false (after saying why) when the frame cannot be used.
+// BVH input with trackers at the joints (no --devices): they are calibrated already, only the size
+// differs, so set_scale(s) gets the standard skeleton's / the clip's leg length. Otherwise (CSV,
+// BVH --devices): --calibration-frame N forces a calibration on input frame N (a T-pose or an
+// upright standing frame; its range was checked by main), else the pipeline calibrates itself from
+// standing windows while it runs (print_calibration says what it found). Prints which; false
+// (after saying why) when the forced frame cannot be used.
 template <class Pipeline, class SetScale>
 bool fit_user(const Options& o, const Input& in, Pipeline& pipe, SetScale&& set_scale) {
-  if (in.have_truth) {
+  if (in.at_joints) {
     const double s = sparsebody::pose::leg_length(pipe.skeleton(), pipe.joint_map()) / in.leg;
     set_scale(s);
-    std::printf("scale   %.3f to the standard skeleton (leg length)\n", s);
+    std::printf("scale   %.3f to the standard skeleton (leg length; trackers at the joints)\n", s);
+    if (o.calibration_forced) std::printf("note    --calibration-frame is not used: these trackers are synthesised at the joints\n");
     return true;
   }
-  if (o.calibration_frame < 0 || o.calibration_frame >= static_cast<int>(in.frames.size()) ||
-      !pipe.calibrate(in.frames[static_cast<std::size_t>(o.calibration_frame)])) {
-    std::fprintf(stderr, "%s: frame %d cannot be used for calibration (headset invalid or too low)\n", o.input.c_str(),
-                 o.calibration_frame);
-    return false;
+  if (o.calibration_forced) {
+    if (!pipe.calibrate(in.frames[static_cast<std::size_t>(o.calibration_frame)])) {
+      std::fprintf(stderr, "%s: frame %ld cannot be used for calibration (headset invalid or too low)\n", o.input.c_str(),
+                   o.calibration_frame);
+      return false;
+    }
+    std::printf("calib   forced on frame %ld (--calibration-frame): stature %.2f m, user scale %.3f\n", o.calibration_frame,
+                pipe.calibration_report().stature, pipe.user_scale());
+    return true;
   }
-  std::printf("calib   T-pose on frame %d, user scale %.3f\n", o.calibration_frame, pipe.user_scale());
+  std::printf("calib   automatic: searching for standing windows (the default body until one is found)\n");
   return true;
+}
+
+// The calibration the run ended with, said honestly: the standing window it found (input frames and
+// times), a refusal, or none (the default body). Nothing for trackers at the joints.
+template <class Pipeline>
+void print_calibration(const Options& o, const Input& in, const Pipeline& pipe) {
+  namespace f = sparsebody::features;
+  if (in.at_joints || o.calibration_forced) return;
+  const f::CalibrationReport& r = pipe.calibration_report();
+  if (r.status == f::CalibrationStatus::Calibrated) {
+    std::printf("calib   automatic: standing at frames %ld-%ld (%.1f-%.1f s), stature %.2f m, confidence %.2f", frame_at(in, r.first_time),
+                frame_at(in, r.last_time), r.first_time - in.frames.front().time, r.last_time - in.frames.front().time, r.stature,
+                r.confidence);
+    if (r.windows > 1) std::printf(", %d windows averaged", r.windows);
+    if (r.skipped > 0) std::printf(", %d lower (sitting?) not used", r.skipped);
+    if (r.refused > 0) std::printf(", %d implausible not used", r.refused);
+    if (r.floor_estimated) std::printf(", floor estimated at y = %.2f m", r.floor);
+    std::printf("\n");
+  } else if (r.status == f::CalibrationStatus::Refused) {
+    std::printf("calib   %s (input frames %ld-%ld)\n", r.message, frame_at(in, r.first_time), frame_at(in, r.last_time));
+  } else {
+    std::printf("calib   no standing frame found: default body (stature %.2f m)\n", r.stature);
+  }
 }
 
 inline void print_credit(const std::string& credit) {
@@ -52,8 +83,8 @@ double last_step_seconds(const Pipeline& p) {
 template <class Pipeline, class ShownSeconds>
 std::optional<Metrics> stream(const Options& o, Input& in, Pipeline& pipe, ShownSeconds&& shown_seconds) {
   namespace sb = sparsebody;
-  const double fps = pipe.meta().frame_rate, user = pipe.user_scale();
-  sb::recordings::BvhWriter writer(pipe.skeleton(), 1.0 / fps, 100.0 * user);
+  const double fps = pipe.meta().frame_rate;
+  sb::recordings::BvhWriter writer(pipe.skeleton(), 1.0 / fps, 100.0 * pipe.user_scale());
   std::optional<Metrics> m;
   if (in.have_truth) m.emplace(pipe.skeleton(), pipe.joint_map(), in, fps);
   double step_seconds = 0;
@@ -65,6 +96,7 @@ std::optional<Metrics> stream(const Options& o, Input& in, Pipeline& pipe, Shown
     step_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     steps += k;
     if (k > 0 && pipe.has_output()) {
+      const double user = pipe.user_scale();  // follows the calibration (automatic: it may change)
       writer.add(pipe.pose(), 100.0 * user);
       const bool contact[2] = {pipe.contact(0), pipe.contact(1)};
       if (m) m->add(pipe.pose(), pipe.world(), user, shown_seconds(), contact);
@@ -73,11 +105,13 @@ std::optional<Metrics> stream(const Options& o, Input& in, Pipeline& pipe, Shown
       std::printf("  %3d%%  frame %zu/%zu, %ld model steps, contacts L %s R %s\n", static_cast<int>(100 * (i + 1) / n), i + 1, n,
                   steps, pipe.contact(0) ? "on " : "off", pipe.contact(1) ? "on " : "off");
   }
+  writer.set_offset_scale(100.0 * pipe.user_scale());  // the skeleton at the size the run ended with
   writer.write(o.output);
   std::printf("wrote   %s: %ld frames at %.0f fps (standard skeleton at the user's size, centimetres)\n", o.output.c_str(), steps,
               fps);
   std::printf("speed   %.1f us per model step (whole pipeline, this run, including resampling)\n",
               1e6 * step_seconds / std::max(1L, steps));
+  print_calibration(o, in, pipe);
   return m;
 }
 

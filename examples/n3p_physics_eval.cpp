@@ -232,6 +232,7 @@ struct Totals {
 void evaluate_clip(const nlohmann::json& c, const Physics::Weights& w, const Options& o, const Dump& dump,
                    const FootJoints& feet, Totals& tot) {
   Physics p(w, o.cfg);
+  p.set_calibration({});  // the dumped trackers are the joints in the body convention (training data)
   const int F = static_cast<int>(c["p"].size());
   ClipScorer direct(c, dump, feet, p.skeleton(), tot.direct), physics(c, dump, feet, p.skeleton(), tot.physics);
   for (int t = 0; t < F; ++t) {

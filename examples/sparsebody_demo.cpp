@@ -2,8 +2,8 @@
 //
 //   sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p] [--no-pelvis]
 //                   [--weights FILE|DIR] [--mode streaming|window] [--no-contact-ik]
-//                   [--trackers-out trackers.csv] [--calibration-frame N] [--storage float|f16|q8] [--physics]
-//                   [--quiet]
+//                   [--trackers-out trackers.csv] [--calibration-frame N] [--devices [--device-seed S]]
+//                   [--storage float|f16|q8] [--physics] [--quiet]
 //
 // Model choice (--model auto, the default): LoBSTr when the input has a pelvis tracker (it needs
 // one), Neural3Points (direct mode) when it has only the headset and controllers, which is what
@@ -18,11 +18,25 @@
 // the same as float to 0.01 cm, the frame 2-4x faster) and float elsewhere (the portable int8 path is
 // exact but slow). See the README for speed and accuracy of each.
 //
-// BVH input: the skeleton is mapped by joint names (pose/joint_map.hpp) and scaled by leg length to
-// the standard skeleton; headset, controllers and pelvis tracker are synthesised from the head,
-// hands and hips, fed at the clip's own rate (the pipeline resamples), and the clip is the ground
-// truth for the metrics. CSV input (recordings/tracker_csv.hpp): frame N (default 0) is the T-pose used
-// for calibration. The output BVH is the standard skeleton at the user's size, in centimetres.
+// Calibration: automatic by default. The pipeline looks for the user standing still (features/
+// auto_calibration.hpp) and runs with the default body until it finds it; the demo prints what it
+// found at the end ("calib   automatic: standing at frames a-b (t0-t1 s), stature ..., confidence
+// ...", a refusal, or "no standing frame found: default body"), never a calibration it did not find.
+// --calibration-frame N forces input frame N (a T-pose or an upright standing frame); N outside the
+// recording is an error (exit code 2).
+// BVH input: the skeleton is mapped by joint names (pose/joint_map.hpp); by default headset,
+// controllers and pelvis tracker are synthesised at the head, hands and hips (the body convention,
+// calibrated already), fed at the clip's own rate (the pipeline resamples) and sized by leg length.
+// --devices synthesises what a headset session would record instead (recordings/
+// tracker_synthesis.hpp: headset at the eyes, grips off the wrists, OpenXR orientations, 72 Hz;
+// --device-seed S adds a per-session perturbation, timing jitter and short losses; --devices-stand T
+// holds the clip's frame at T s for 2.5 s, a standing window for clips without one), calibrated
+// automatically like a real session; it is opt-in because a clip without a second of standing
+// still (such as the CMU clip of the tests) then runs with the default body. The clip is the
+// ground truth for the metrics either way. CSV input (recordings/tracker_csv.hpp): a recorded
+// session. --trackers-out writes the trackers used as such a CSV (from --devices: a device-
+// realistic session that the CSV path calibrates with its default options). The output BVH is the
+// standard skeleton at the user's size (the size the run ended with), in centimetres.
 //
 // Files: this one (per-pipeline setup, model choice), demo_options (command line), demo_input (BVH
 // or CSV in, synthesised trackers, ground truth), demo_run (the frame loop every pipeline shares:
@@ -191,6 +205,11 @@ int main(int argc, char** argv) {
   try {
     Input in;
     read_input(o, in);
+    if (o.calibration_forced && (o.calibration_frame < 0 || o.calibration_frame >= static_cast<long>(in.frames.size()))) {
+      std::fprintf(stderr, "error: --calibration-frame %ld is outside the recording (%s has %zu tracker frames: 0-%zu)\n",
+                   o.calibration_frame, o.input.c_str(), in.frames.size(), in.frames.size() - 1);
+      return 2;
+    }
     const std::optional<Model> model = choose_model(o, in);
     if (!model) return 1;
     return *model == Model::N3P ? run_neural3points(o, in) : run_lobstr_weights(o, in);

@@ -30,6 +30,7 @@ int evaluate(const nlohmann::json& d, const std::string& prefix, const char* sto
     long n = 0, ns = 0;
     for (const auto& c : d["clips"]) {
       Pipeline p(w, cfg);
+      p.set_calibration({});  // the dumped trackers are the joints in the body convention (training data)
       const int F = static_cast<int>(c["p"].size());
       Eigen::Vector3d prev[2];
       for (int t = 0; t < F; ++t) {

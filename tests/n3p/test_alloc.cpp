@@ -5,6 +5,7 @@
 
 #include "n3p/common.hpp"
 #include "support/alloc_counter.hpp"
+#include "support/standing_stream.hpp"
 
 using namespace sparsebody;
 
@@ -56,5 +57,30 @@ TEST_CASE("n3p pipeline with int8 weights (nn/int8.hpp): no allocation per frame
     n = counter.count();
   }
   CHECK(n == 0);
+  CHECK(p.has_output());
+}
+
+// The automatic calibration inside push() (standing windows found, refined, skipped, refused,
+// recalibrate()) allocates nothing.
+TEST_CASE("n3p pipeline: no allocation per frame with the automatic calibration finding standing windows") {
+  using sparsebody_test::Phase;
+  auto frames = sparsebody_test::session({{Phase::Walk, 1.0, 1.70}, {Phase::Stand, 2.5, 1.70}, {Phase::Walk, 1.0, 1.70},
+                                          {Phase::Stand, 2.5, 1.76}, {Phase::Walk, 1.0, 1.76}, {Phase::Stand, 2.5, 1.20},
+                                          {Phase::Walk, 1.0, 1.76}, {Phase::Stand, 2.5, 2.4}, {Phase::Walk, 1.0, 1.76}},
+                                         72.0, 0.3, false);
+  for (std::size_t i = 400; i < 405; ++i) frames[i].pose[0].position.x = std::numeric_limits<float>::quiet_NaN();
+  n3p_test::SmallPipeline p(n3p_test::SmallPipeline::load(n3p_test::small_prefix()));
+  for (int i = 0; i < 3; ++i) p.push(frames[static_cast<std::size_t>(i)]);
+  long long n = 0;
+  {
+    sparsebody_test::AllocationCounter counter;
+    for (std::size_t i = 3; i < frames.size(); ++i) {
+      p.push(frames[i]);
+      if (i == frames.size() / 2) p.recalibrate();
+    }
+    n = counter.count();
+  }
+  CHECK(n == 0);
+  CHECK(p.calibration_report().status == features::CalibrationStatus::Calibrated);
   CHECK(p.has_output());
 }

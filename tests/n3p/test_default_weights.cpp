@@ -45,6 +45,8 @@ TEST_CASE("n3p default weights: C++ equals PyTorch over a clip at the paper's si
 TEST_CASE("n3p default weights: direct mode puts reachable hands on the controllers, never NaN") {
   const auto g = n3p_test::read_json(n3p_test::golden_dir() + "/n3p_default.golden.json");
   Paper p(Paper::load(prefix()));
+  // synthetic trackers at the joints in the body convention: the identity calibration
+  p.set_calibration({});
   const int hand[2] = {p.skeleton().find("Hand_L"), p.skeleton().find("Hand_R")};
   int reachable = 0, on = 0;
   for (int t = 0; t < g["frames"].get<int>(); ++t) {

@@ -34,6 +34,8 @@ avatar::N3PConfig no_ik() {
 TEST_CASE("n3p pipeline: without IK it reproduces the PyTorch reference, controller flags -> modes") {
   const auto& g = golden();
   n3p_test::SmallPipeline p(weights(), no_ik());
+  // synthetic trackers at the joints in the body convention: the identity calibration
+  p.set_calibration({});
   int modes[3] = {0, 0, 0};
   double worst = 0;
   for (int t = 0; t < g["frames"].get<int>(); ++t) {
@@ -58,6 +60,9 @@ TEST_CASE("n3p pipeline: HMD-only by configuration ignores tracked controllers")
   avatar::N3PConfig c = no_ik();
   c.use_controllers = false;
   n3p_test::SmallPipeline hmd(weights(), c), three(weights(), no_ik());
+  // synthetic trackers at the joints in the body convention: the identity calibration
+  hmd.set_calibration({});
+  three.set_calibration({});
   double diff = 0;
   for (int t = 0; t < 50; ++t) {
     auto f = n3p_test::golden_frame(g, t);
@@ -77,6 +82,9 @@ TEST_CASE("n3p direct mode: hands on the controllers, feet pinned while in conta
   c.contact_threshold = -1.0;  // every frame in contact: both feet lock
   c.foot_max_drift = 100.0;   // random weights: feet jump about; keep the locks for the test
   n3p_test::SmallPipeline p(weights(), c), free(weights(), no_ik());
+  // synthetic trackers at the joints in the body convention: the identity calibration
+  p.set_calibration({});
+  free.set_calibration({});
   const int hand[2] = {p.skeleton().find("Hand_L"), p.skeleton().find("Hand_R")};
   const int foot[2] = {p.skeleton().find("Foot_L"), p.skeleton().find("Foot_R")};
   const int upleg[2] = {p.skeleton().find("UpperLeg_L"), p.skeleton().find("UpperLeg_R")};
@@ -118,9 +126,10 @@ TEST_CASE("n3p calibration (§7): T-pose offsets put the devices' joints at the 
   const double user = 1.1, head_h = 1.378 * user;
   trackers::TrackerFrame f;
   const Eigen::Matrix3d yaw = features::yaw_frame(Eigen::Vector3d(0, 0, -1), Eigen::Matrix3d::Identity());
-  const Eigen::Vector3d head(0.3, head_h, 2.0);
+  const Eigen::Vector3d head(0.3, head_h, 2.0);  // the head joint; the headset is the eye offset from it
   const Eigen::Quaterniond qh = Eigen::Quaterniond::Identity();  // OpenXR: the headset looks along its -Z
-  f.pose[0] = {trackers::to_xr(qh), trackers::to_xr(head)};
+  const features::DeviceModel devices;
+  f.pose[0] = {trackers::to_xr(qh), trackers::to_xr(Eigen::Vector3d(head + yaw * devices.eye))};
   Eigen::Vector3d wrist_world[2];
   for (int k = 1; k < 3; ++k) {
     wrist_world[k - 1] = head + yaw * (w[k - 1] * user);
@@ -135,7 +144,8 @@ TEST_CASE("n3p calibration (§7): T-pose offsets put the devices' joints at the 
   for (int k = 1; k < 3; ++k) {
     trackers::PoseD d{trackers::to_eigen(f.pose[k].position), trackers::to_eigen(f.pose[k].orientation)};
     d.orientation.normalize();
-    CHECK((c.offset[k] + Eigen::Vector3d(0, -0.02, 0.08)).norm() < 1e-5);  // device -> wrist
+    // d_k in the calibrated frame (the facing frame here): device - wrist = R_cal d_k
+    CHECK((yaw * c.base.position_offset[k] - d.orientation * Eigen::Vector3d(0, -0.02, 0.08)).norm() < 1e-5);
     const auto j = c.apply(k, d);
     CHECK((j.p - wrist_world[k - 1] / user).norm() < 1e-5);
     // calibrated orientation = the facing frame at calibration
@@ -145,9 +155,10 @@ TEST_CASE("n3p calibration (§7): T-pose offsets put the devices' joints at the 
   // not a T-pose (a controller at the head): orientations and scale only, no wrist offsets
   f.pose[1].position = f.pose[0].position;
   REQUIRE(c.from_tpose(f, s, 0.908, 1.378));
-  CHECK_FALSE(c.hand_offsets);
-  CHECK(c.offset[1].norm() == 0.0);
-  CHECK(c.offset[2].norm() == 0.0);
+  CHECK_FALSE(c.hand_offsets);  // the device model's grip offsets (were zero before the device model)
+  CHECK((c.base.position_offset[1] - devices.grip_left).norm() == 0.0);
+  CHECK((c.base.position_offset[2] - devices.grip_right).norm() == 0.0);
+  CHECK((c.base.position_offset[0] - devices.eye).norm() == 0.0);
   // no usable headset: unchanged, false
   f.valid[0] = false;
   CHECK_FALSE(c.from_tpose(f, s, 0.908, 1.378));
@@ -157,6 +168,8 @@ TEST_CASE("n3p calibration (§7): T-pose offsets put the devices' joints at the 
 TEST_CASE("n3p pipeline: bad input never produces a NaN and is handled as defined") {
   const auto& g = golden();
   n3p_test::SmallPipeline p(weights());
+  // synthetic trackers at the joints in the body convention: the identity calibration
+  p.set_calibration({});
   const double nan = std::numeric_limits<double>::quiet_NaN();
   // no headset yet: no output
   auto f0 = n3p_test::golden_frame(g, 0);

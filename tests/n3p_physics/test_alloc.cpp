@@ -7,6 +7,7 @@
 
 #include "n3p_physics/common.hpp"
 #include "support/alloc_counter.hpp"
+#include "support/standing_stream.hpp"
 
 using namespace sparsebody;
 
@@ -16,6 +17,7 @@ TEST_CASE("n3p physics: no allocation per frame") {
     avatar::N3PPhysicsConfig c;
     if (falls) c.fall.min_height = 5.0;  // every frame resets the character
     Physics p(n3p_physics_test::weights(), c);
+    p.set_calibration({});  // synthetic users: trackers at the joints, body convention
     std::vector<trackers::TrackerFrame> frames;
     for (int t = 0; t < 240; ++t) frames.push_back(n3p_physics_test::user_frame(t, 1.0));
     frames[40].pose[0].position.x = std::numeric_limits<float>::quiet_NaN();
@@ -42,6 +44,7 @@ TEST_CASE("n3p physics: no allocation per frame") {
 TEST_CASE("n3p physics: no allocation per simulation step (controller + correction + step)") {
   using n3p_physics_test::Physics;
   Physics p(n3p_physics_test::weights());
+  p.set_calibration({});  // synthetic users: trackers at the joints, body convention
   const auto& m = p.model();
   dynamics::Simulator<float, 24, 72> sim(m);
   control::ModelBasedController<float, 24, 72> ctl(m);
@@ -67,4 +70,29 @@ TEST_CASE("n3p physics: no allocation per simulation step (controller + correcti
     n = counter.count();
   }
   CHECK(n == 0);
+}
+
+// The automatic calibration inside push(): a standing window found mid-stream changes the
+// calibration, which restarts the physics (the reference changes size); nothing allocates.
+TEST_CASE("n3p physics: automatic calibration restarts the physics and allocates nothing") {
+  using n3p_physics_test::Physics;
+  using sparsebody_test::Phase;
+  const auto frames = sparsebody_test::session({{Phase::Walk, 1.0, 1.70}, {Phase::Stand, 2.5, 1.70}, {Phase::Walk, 1.0, 1.70},
+                                                {Phase::Stand, 2.5, 1.60}, {Phase::Walk, 1.0, 1.60}},
+                                               72.0, 0.3, false);
+  Physics p(n3p_physics_test::weights());
+  for (int t = 0; t < 6; ++t) p.push(frames[static_cast<std::size_t>(t)]);
+  const long long restarts = p.restarts();
+  long long n = 0;
+  {
+    sparsebody_test::AllocationCounter counter;
+    for (std::size_t t = 6; t < frames.size(); ++t) p.push(frames[t]);
+    n = counter.count();
+  }
+  CHECK(n == 0);
+  CHECK(p.calibration_report().status == features::CalibrationStatus::Calibrated);
+  CHECK(p.calibration_report().skipped == 1);
+  CHECK(p.restarts() == restarts + 1);  // once, when the standing window was accepted
+  CHECK(p.has_output());
+  CHECK(n3p_physics_test::finite_output(p));
 }

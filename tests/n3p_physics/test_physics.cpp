@@ -15,6 +15,7 @@ using n3p_physics_test::user_frame;
 
 TEST_CASE("n3p physics retarget: q -> pose -> q is exact; the standing pose stands on the floor") {
   Physics p(n3p_physics_test::weights());
+  p.set_calibration({});  // synthetic users: trackers at the joints, body convention
   const auto& m = p.model();
   const auto& r = p.retarget();
   std::mt19937 rng(3);
@@ -59,6 +60,7 @@ TEST_CASE("n3p physics retarget: q -> pose -> q is exact; the standing pose stan
 
 TEST_CASE("n3p physics: the model-based controller keeps a standing user upright for 10 s") {
   Physics p(n3p_physics_test::weights());
+  p.set_calibration({});  // synthetic users: trackers at the joints, body convention
   const double max_force = p.config().controller.max_force, max_torque = p.config().controller.max_torque;
   int frames = 0, airborne = 0;
   for (int t = 0; t < 300; ++t) {
@@ -92,6 +94,7 @@ TEST_CASE("n3p physics: the model-based controller keeps a standing user upright
 
 TEST_CASE("n3p physics: the output is the input frame 0.1 s back") {
   Physics p(n3p_physics_test::weights());
+  p.set_calibration({});  // synthetic users: trackers at the joints, body convention
   for (int t = 0; t < 60; ++t) {
     const auto f = user_frame(t, 0.0);
     p.push(f);
@@ -105,6 +108,7 @@ TEST_CASE("n3p physics: the output is the input frame 0.1 s back") {
 
 TEST_CASE("n3p physics: tracker correction turns F into arm torques that move the hand along F") {
   Physics p(n3p_physics_test::weights());
+  p.set_calibration({});  // synthetic users: trackers at the joints, body convention
   const auto& m = p.model();
   control::TrackerCorrection<float, 24, 72> tc(m);
   dynamics::Data<float, 24, 72> d(m);
@@ -151,6 +155,7 @@ TEST_CASE("n3p physics: a fall resets the character to the predicted pose and th
   avatar::N3PPhysicsConfig c;
   c.fall.min_height = 5.0;  // every frame counts as a fall
   Physics p(n3p_physics_test::weights(), c);
+  p.set_calibration({});  // synthetic users: trackers at the joints, body convention
   long long frames = 0;
   for (int t = 0; t < 60; ++t) {
     p.push(user_frame(t, 1.0));
@@ -172,6 +177,7 @@ TEST_CASE("n3p physics: a fall resets the character to the predicted pose and th
   c2.controller.max_force = 0;  // no help at all: it must fall while walking, and be put back
   c2.controller.max_torque = 0;
   Physics q(n3p_physics_test::weights(), c2);
+  q.set_calibration({});  // synthetic users: trackers at the joints, body convention
   for (int t = 0; t < 300; ++t) {
     q.push(user_frame(t, 1.2));
     if (!q.has_output()) continue;
@@ -184,6 +190,7 @@ TEST_CASE("n3p physics: a fall resets the character to the predicted pose and th
 
 TEST_CASE("n3p physics: NaN, lost trackers and jumps give finite output and defined recovery") {
   Physics p(n3p_physics_test::weights());
+  p.set_calibration({});  // synthetic users: trackers at the joints, body convention
   const double nan = std::numeric_limits<double>::quiet_NaN();
   long long restarts = 0;
   for (int t = 0; t < 420; ++t) {
@@ -210,6 +217,7 @@ TEST_CASE("n3p physics: NaN, lost trackers and jumps give finite output and defi
 
 TEST_CASE("n3p physics: ground_lift is how far the lowest contact point is below the floor") {
   Physics p(n3p_physics_test::weights());
+  p.set_calibration({});  // synthetic users: trackers at the joints, body convention
   const auto& m = p.model();
   control::ModelBasedController<float, 24, 72> ctl(m);
   Physics::VecQ q = m.neutral_configuration();

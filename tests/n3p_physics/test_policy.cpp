@@ -99,6 +99,7 @@ TEST_CASE("n3p physics policy path: runs, recovers from falls, no allocation per
   REQUIRE_MESSAGE(probe.good(), "run the parity test case first (it writes the random policy)");
   const auto w = Physics::load(SPARSEBODY_N3P_WEIGHTS);
   Physics p(w, Physics::ControlPredictor::load_policy(dir + "/n3p_policy_random.json"));
+  p.set_calibration({});  // synthetic users: trackers at the joints, body convention
   CHECK(p.controller_kind() == avatar::ControllerKind::Policy);
   auto frame = [](int t) {
     trackers::TrackerFrame f;
@@ -144,6 +145,8 @@ TEST_CASE("n3p control predictor: the rollout's hands are put on the trackers by
   const auto w = Physics::load(SPARSEBODY_N3P_WEIGHTS);
   const auto policy = Physics::ControlPredictor::load_policy(dir + "/n3p_policy_random.json");
   Physics with(w, policy), without(w, policy);
+  with.set_calibration({});  // synthetic users: trackers at the joints, body convention
+  without.set_calibration({});
   without.control_predictor()->tracker_ik = false;
   auto frame = [](int t) {  // walking forward, hands swinging in front of the hips
     trackers::TrackerFrame f;

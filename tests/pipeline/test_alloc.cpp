@@ -6,6 +6,7 @@
 
 #include "common.hpp"
 #include "support/alloc_counter.hpp"
+#include "support/standing_stream.hpp"
 
 using namespace sparsebody;
 
@@ -39,4 +40,28 @@ TEST_CASE("pipeline frames allocate nothing (streaming and window)") {
     CHECK(p.has_output());
     CHECK(steps == static_cast<int>(frames.size()) + 1);
   }
+}
+
+// The automatic calibration inside push(): standing windows found, refused, skipped, broken by a
+// NaN burst, recalibrate(): none of it allocates.
+TEST_CASE("pipeline frames allocate nothing with the automatic calibration finding standing windows") {
+  using sparsebody_test::Phase;
+  auto frames = sparsebody_test::session({{Phase::Walk, 1.0, 1.70}, {Phase::Stand, 2.5, 1.70}, {Phase::Walk, 1.0, 1.70},
+                                          {Phase::Stand, 2.5, 1.76}, {Phase::Walk, 1.0, 1.76}, {Phase::Stand, 2.5, 1.20},
+                                          {Phase::Walk, 1.0, 1.76}, {Phase::Stand, 2.5, 2.4}, {Phase::Walk, 1.0, 1.76}},
+                                         72.0);
+  for (std::size_t i = 400; i < 405; ++i) frames[i].pose[0].position.x = std::numeric_limits<float>::quiet_NaN();
+  pipeline_test::SmallPipeline p(pipeline_test::small_weights());
+  for (int i = 0; i < 3; ++i) p.push(frames[static_cast<std::size_t>(i)]);
+  {
+    sparsebody_test::AllocationCounter c;
+    for (std::size_t i = 3; i < frames.size(); ++i) {
+      p.push(frames[i]);
+      if (i == frames.size() / 2) p.recalibrate();
+    }
+    CHECK(c.count() == 0);
+  }
+  CHECK(p.calibration_report().status == features::CalibrationStatus::Calibrated);
+  CHECK(p.calibration_report().skipped + p.calibration_report().refused >= 1);
+  CHECK(p.has_output());
 }

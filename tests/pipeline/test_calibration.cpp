@@ -25,13 +25,26 @@ TEST_CASE("T-pose calibration of an OpenXR-convention stream in a rotated stage 
       p.position = trackers::to_xr(Eigen::Vector3d(yaw * trackers::to_eigen(p.position) + shift));
       p.orientation = trackers::to_xr(Eigen::Quaterniond(yaw * trackers::to_eigen(p.orientation)));
     }
-  pipeline_test::SmallPipeline a(pipeline_test::small_weights()), b(pipeline_test::small_weights());
+  // b calibrates on frame 0; the stream's trackers are at the joints (no device offsets)
+  avatar::LoBSTrConfig at_joints;
+  at_joints.devices = features::DeviceModel::none();
+  pipeline_test::SmallPipeline a(pipeline_test::small_weights()), b(pipeline_test::small_weights(), at_joints);
   features::Calibration c;
   c.scale = g["scale"].get<double>();
   a.set_calibration(c);
   REQUIRE(b.calibrate(xr[0]));
-  // height scale from the pelvis height at calibration: the standard standing pelvis height / this one
-  CHECK(b.calibration().scale == doctest::Approx(b.meta().standing_hips_height / xr[0].pose[3].position.y).epsilon(1e-6));
+  // height scale from the head-joint height at calibration (the default since the device model; it
+  // was the pelvis height): the standard standing head height / this one (no eye offset here)
+  CHECK(b.calibration().scale == doctest::Approx(b.meta().standing_head_height / xr[0].pose[0].position.y).epsilon(1e-6));
+  CHECK(b.calibration_report().status == features::CalibrationStatus::Calibrated);
+  CHECK(b.calibration_report().source == features::CalibrationSource::Explicit);
+  {  // the pelvis-height variant stays an option
+    avatar::LoBSTrConfig pelvis = at_joints;
+    pelvis.scale_from = features::ScaleFrom::Pelvis;
+    pipeline_test::SmallPipeline bp(pipeline_test::small_weights(), pelvis);
+    REQUIRE(bp.calibrate(xr[0]));
+    CHECK(bp.calibration().scale == doctest::Approx(bp.meta().standing_hips_height / xr[0].pose[3].position.y).epsilon(1e-6));
+  }
   features::Calibration cb = b.calibration();
   cb.scale = c.scale;  // compare at the same size
   b.set_calibration(cb);

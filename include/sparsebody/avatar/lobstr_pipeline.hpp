@@ -2,7 +2,8 @@
 // on the standard skeleton out.
 //
 //   TrackerFrame (any rate) -> Resampler (model rate) -> TrackerSanitizer (bad input)
-//     -> Calibration (offsets, height scale) -> LoBSTrFeatures (37) -> LoBSTrNet (GRU)
+//     -> Calibration (device offsets, orientation offsets, height scale; found automatically from
+//        standing windows, features/auto_calibration.hpp) -> LoBSTrFeatures (37) -> LoBSTrNet (GRU)
 //     -> lower body: 8 local rotations (6D) under the hips placed by the pelvis tracker
 //     -> contacts -> FootLock + leg IK (§3.4.1);  upper body: spine/head aim + two-bone arm IK
 //        (avatar/lobstr_upper_body.hpp).
@@ -13,6 +14,11 @@
 //              distribution only as far as the GRU generalises; the state is reset after gaps.
 //   Window     each frame re-runs the last N = 1 s of features from a zero state, exactly as in
 //              the paper's training and inference (§3.2, Δi = 1 s); N times the cost.
+// Calibration: by default automatic (Config::calibration): until the user has stood still for a
+// second the pipeline runs with the default body (s = 1, half-turn offsets, the device offsets of
+// Config::devices) and calibration_report() says so; each accepted standing window recalibrates and
+// restarts the feature history (no velocity spike). calibrate(frame) (a T-pose or a standing
+// frame) and set_calibration(c) are explicit: used as given, the search stops until recalibrate().
 // Per frame: no allocation, no exception, no lock. Everything is sized at construction.
 #pragma once
 #include <memory>
@@ -21,7 +27,9 @@
 
 #include "sparsebody/avatar/lobstr_upper_body.hpp"
 #include "sparsebody/avatar/pipeline_front_end.hpp"
+#include "sparsebody/features/auto_calibration.hpp"
 #include "sparsebody/features/calibration.hpp"
+#include "sparsebody/features/device_model.hpp"
 #include "sparsebody/features/lobstr_features.hpp"
 #include "sparsebody/networks/lobstr_net.hpp"
 #include "sparsebody/nn/half.hpp"
@@ -52,6 +60,9 @@ struct LoBSTrConfig {
   trackers::StillnessConfig stillness{};
   bool upper_body_ik = true;
   trackers::SanitizerConfig sanitizer{};
+  features::DeviceModel devices{};                 // device -> joint offsets (DeviceModel::none(): trackers at the joints)
+  features::AutoCalibrationConfig calibration{};   // the standing-window search (enabled by default)
+  features::ScaleFrom scale_from = features::ScaleFrom::Head;  // explicit calibrate(frame): head or pelvis height
 };
 
 // W: the network's stored weight type: T, nn::f16 (half the bytes) or nn::q8 (int8, a quarter;
@@ -78,25 +89,55 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     window_ = cfg_.window > 0 ? cfg_.window : static_cast<int>(meta_.frame_rate + 0.5);
     if (cfg_.mode == RunMode::Window) ring_.assign(static_cast<std::size_t>(window_) * kFeatures, T(0));
     upper_ = LoBSTrUpperBody(s, map_);
+    auto_ = features::AutoCalibration(cfg.devices, meta_.standing_head_height, cfg.calibration, meta_.standing_hips_height);
+    calib_ = auto_.calibration();
     reset();
   }
 
   // --- calibration -------------------------------------------------------------------------
-  void set_calibration(const features::Calibration& c) noexcept { calib_ = c; }
-  const features::Calibration& calibration() const noexcept { return calib_; }
-  // T-pose calibration from one frame (paper §4.2); false when the frame cannot be used.
-  bool calibrate(const trackers::TrackerFrame& tpose) noexcept {
-    return calib_.from_tpose(tpose, meta_.standing_hips_height, meta_.standing_head_height);
+  // Explicit calibrations: used as given, the automatic search stops until recalibrate(). A change
+  // restarts the feature history (as a reset does).
+  void set_calibration(const features::Calibration& c) noexcept {
+    calib_ = c;
+    auto_.set_explicit(c, features::CalibrationSource::Application);
+    reset_state();
   }
+  const features::Calibration& calibration() const noexcept { return calib_; }
+  // From one frame of the user upright facing forward (a T-pose, paper §4.2, or a standing frame);
+  // false (unchanged) when the frame cannot be used.
+  bool calibrate(const trackers::TrackerFrame& frame) noexcept {
+    features::Calibration c;
+    if (!c.from_tpose(frame, meta_.standing_hips_height, meta_.standing_head_height, cfg_.devices, cfg_.scale_from)) return false;
+    calib_ = c;
+    auto_.set_explicit(c, features::CalibrationSource::Explicit, frame.time);
+    reset_state();
+    return true;
+  }
+  // Forget the calibration (explicit or automatic) and search for standing windows again.
+  void recalibrate() noexcept {
+    auto_.recalibrate();
+    calib_ = auto_.calibration();
+    reset_state();
+  }
+  // What the calibration in use is based on (default body, automatic, explicit, refused).
+  const features::CalibrationReport& calibration_report() const noexcept { return auto_.report(); }
+  const features::AutoCalibration& auto_calibration() const noexcept { return auto_; }
 
   // --- running ------------------------------------------------------------------------------
   // push(frame) (any rate, PipelineFrontEnd) runs step once per model tick.
   // One model frame (the caller does the resampling). `restart`: state reset before this frame.
   void step(const trackers::TrackerFrame& f, bool restart = false) noexcept {
     const trackers::SanitizedFrame& s = stream_.sanitize(f);
-    if (restart || s.reset) reset_state();
+    if (restart || s.reset) {
+      reset_state();
+      auto_.break_window();
+    }
     ++frames_;
     if (!s.usable) { out_.invalidate(); return; }
+    if (auto_.push(f.time, s.pose, s.measured)) {  // a new calibration: restart the history
+      calib_ = auto_.calibration();
+      reset_state();
+    }
     calib_.apply(s.pose, cal_);
     still_.update(cal_[0].position, cal_[0].orientation, 1.0 / meta_.frame_rate);
     feat_.compute(cal_, x_);
@@ -112,7 +153,14 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     if (!out_.commit()) reset_state();
   }
 
+  // Back to the constructed state; an explicit calibration is kept, an automatic one is
+  // forgotten (the search starts again, as in a new instance).
   void reset() noexcept {
+    if (!auto_.manual()) {
+      auto_.recalibrate();
+      calib_ = auto_.calibration();
+    }
+    auto_.break_window();
     reset_state();
     this->reset_front_end();
   }
@@ -203,6 +251,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   predict::LoBSTrMeta meta_;
   nn::Network<Net> net_;
   features::Calibration calib_;
+  features::AutoCalibration auto_;
   features::LoBSTrFeatures feat_;
   pose::JointMap map_{};
   Eigen::Matrix3d F_hips_T_;

@@ -2,7 +2,8 @@
 // controllers in, a full-body pose on the standard skeleton out, no pelvis tracker needed.
 //
 //   TrackerFrame (any rate) -> Resampler (30 Hz) -> TrackerSanitizer (bad input)
-//     -> N3PCalibration (device -> head / wrist joints, height scale, §7)
+//     -> N3PCalibration (device -> head / wrist joints, height scale, §7; found automatically from
+//        standing windows by default, features/auto_calibration.hpp)
 //     -> N3PPredictor (Eq. (2): G_sig -> G_lo -> heading update -> G_up; o* for missing controllers)
 //     -> direct-mode IK (§7, "to enforce foot contacts and achieve accurate tracker positions"):
 //        feet in contact (c > threshold) are pinned at the ankle (pose::FootLock, below) with
@@ -21,13 +22,18 @@
 //     tolerance, or a position further than `controller_max_distance` from the headset: the
 //     controller is missing for that frame and o* stands in (§8.2). No hold and no reset, so a
 //     controller coming back after a long absence is simply used again.
+// Calibration (as the LoBSTr pipeline): automatic by default; until a standing window is found the
+// default body (s = 1, half-turn offsets, Config::devices' offsets), said by calibration_report();
+// a new calibration restarts the predictor (no velocity spike). calibrate(frame) and
+// set_calibration(c) are explicit and stop the search until recalibrate().
 // The output pose is always finite: a frame that would not be keeps the last pose.
 // Per frame: no allocation, no exception, no lock. Everything is sized at construction.
 //
 // Use (the LoBSTr pipeline's shape; N3PDirect is the shipped weights' configuration):
 //   auto w = avatar::N3PDirect::load("examples/weights/n3p");   // n3p_{signal,lower,upper}.json
 //   avatar::N3PDirect p(w);
-//   p.calibrate(tpose_frame);                  // optional, §7
+//   // calibration is automatic (the first second of standing still); p.calibrate(frame) forces a
+//   // frame (a T-pose measures the wrist offsets, §7), p.recalibrate() searches again
 //   for (frame : frames) { p.push(frame); if (p.has_output()) use(p.pose(), p.world(), p.user_scale()); }
 #pragma once
 #include <array>
@@ -35,6 +41,8 @@
 #include <string>
 
 #include "sparsebody/avatar/pipeline_front_end.hpp"
+#include "sparsebody/features/auto_calibration.hpp"
+#include "sparsebody/features/device_model.hpp"
 #include "sparsebody/features/n3p_calibration.hpp"
 #include "sparsebody/nn/half.hpp"
 #include "sparsebody/nn/int8.hpp"
@@ -57,6 +65,8 @@ struct N3PConfig {
   // While the user stands still (trackers::Stillness on the headset) pinned feet stay pinned and a
   // foot the predictor gives at least still_contact_threshold pins too: no creeping feet.
   bool hold_feet_when_still = true;
+  double still_contact_threshold = 0.25;
+  trackers::StillnessConfig stillness{};
   // Head anchor: after every step the predicted body (its heading frame h) moves horizontally so
   // that its head joint is where the calibrated headset puts it. The predictor only integrates its
   // own dh, so without this the avatar drifts from the user (tens of cm in turns, metres over a
@@ -66,9 +76,9 @@ struct N3PConfig {
   // 11 validation clips (offdist --every 30): gain 0 / 0.1 / 0.3 / 1 give MPJPE 4.78 / 4.69 / 4.59 /
   // 6.16 cm and head error 3.94 / 3.58 / 3.11 / 2.35 cm; 1 moves the free feet with every correction.
   double anchor_gain = 0.3;
-  double still_contact_threshold = 0.25;
-  trackers::StillnessConfig stillness{};
   trackers::SanitizerConfig sanitizer{};
+  features::DeviceModel devices{};                // device -> joint offsets (DeviceModel::none(): trackers at the joints)
+  features::AutoCalibrationConfig calibration{};  // the standing-window search (enabled by default)
 };
 
 template <typename T = float, int HSig = 64, int HLo = 128, int HUp = 128, typename W = T>
@@ -100,16 +110,47 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     for (int side = 0; side < 2; ++side)
       reach_[side] = s.offsets[leg_[side][1]].norm() + s.offsets[leg_[side][2]].norm();
     head_ = f("Head");
+    auto_ = features::AutoCalibration(cfg.devices, pred_.meta().standing_head_height, cfg.calibration);
+    calib_.base = auto_.calibration();
     reset();
   }
 
   // --- calibration (§7) ---------------------------------------------------------------------
-  void set_calibration(const features::n3p::N3PCalibration& c) noexcept { calib_ = c; }
-  const features::n3p::N3PCalibration& calibration() const noexcept { return calib_; }
-  // From a T-pose frame (headset and both controllers valid); false when it cannot be used.
-  bool calibrate(const trackers::TrackerFrame& tpose) noexcept {
-    return calib_.from_tpose(tpose, pred_.skeleton(), pred_.meta().standing_hips_height, pred_.meta().standing_head_height);
+  // Explicit calibrations: used as given, the automatic search stops until recalibrate(). A change
+  // restarts the predictor (as a reset does).
+  void set_calibration(const features::n3p::N3PCalibration& c) noexcept {
+    calib_ = c;
+    auto_.set_explicit(c.base, features::CalibrationSource::Application);
+    reset_state();
+    ++calibration_changes_;
   }
+  const features::n3p::N3PCalibration& calibration() const noexcept { return calib_; }
+  // From a T-pose frame (wrist offsets measured when both controllers are where a T-pose puts
+  // them) or any upright standing frame; false (unchanged) when the headset part cannot be used.
+  bool calibrate(const trackers::TrackerFrame& frame) noexcept {
+    features::n3p::N3PCalibration c;
+    if (!c.from_tpose(frame, pred_.skeleton(), pred_.meta().standing_hips_height, pred_.meta().standing_head_height, cfg_.devices))
+      return false;
+    calib_ = c;
+    auto_.set_explicit(c.base, features::CalibrationSource::Explicit, frame.time);
+    reset_state();
+    ++calibration_changes_;
+    return true;
+  }
+  // Forget the calibration (explicit or automatic) and search for standing windows again.
+  void recalibrate() noexcept {
+    auto_.recalibrate();
+    calib_ = features::n3p::N3PCalibration{};
+    calib_.base = auto_.calibration();
+    reset_state();
+    ++calibration_changes_;
+  }
+  // What the calibration in use is based on (default body, automatic, explicit, refused).
+  const features::CalibrationReport& calibration_report() const noexcept { return auto_.report(); }
+  const features::AutoCalibration& auto_calibration() const noexcept { return auto_; }
+  // Counts calibration changes (automatic or explicit): a reader of this pipeline's output (the
+  // physics mode) restarts when it moves.
+  long long calibration_changes() const noexcept { return calibration_changes_; }
 
   // --- running ------------------------------------------------------------------------------
   // push(frame) (any rate, PipelineFrontEnd) runs step once per 30 Hz tick.
@@ -118,17 +159,29 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     trackers::TrackerFrame head_only = f;  // the sanitizer looks after the headset only
     head_only.valid[1] = head_only.valid[2] = head_only.valid[3] = false;
     const trackers::SanitizedFrame& s = stream_.sanitize(head_only);
-    if (restart || s.reset) reset_state();
+    if (restart || s.reset) {
+      reset_state();
+      auto_.break_window();
+    }
     ++frames_;
     if (!s.usable) return;  // no headset yet: no output (or the last one is kept)
+    std::array<trackers::PoseD, trackers::kTrackerCount> dev;
+    std::array<bool, trackers::kTrackerCount> measured{s.measured[0], false, false, false};
+    dev[0] = s.pose[0];
+    for (int k = 1; k < 3; ++k) measured[k] = controller(f, k, s.pose[0].position, dev[k]);
+    if (auto_.push(f.time, dev, measured)) {  // a new calibration: restart the predictor
+      calib_ = features::n3p::N3PCalibration{};
+      calib_.base = auto_.calibration();
+      reset_state();
+      ++calibration_changes_;
+    }
     features::n3p::TrackerSet o;
     std::array<bool, 3> present{true, false, false};  // the headset: measured or held
     o[0] = calib_.apply(0, s.pose[0]);
     still_.update(s.pose[0].position, s.pose[0].orientation, 1.0 / pred_.meta().frame_rate);
     for (int k = 1; k < 3; ++k) {
-      trackers::PoseD c;
-      present[k] = cfg_.use_controllers && controller(f, k, s.pose[0].position, c);
-      if (present[k]) o[k] = calib_.apply(k, c);
+      present[k] = cfg_.use_controllers && measured[k];
+      if (present[k]) o[k] = calib_.apply(k, dev[k]);
     }
     trackers_ = o;
     present_ = present;
@@ -150,7 +203,15 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     if (!out_.commit()) reset_state();  // never hand out a NaN: the last pose is kept; restart
   }
 
+  // Back to the constructed state; an explicit calibration is kept, an automatic one is
+  // forgotten (the search starts again, as in a new instance).
   void reset() noexcept {
+    if (!auto_.manual()) {
+      auto_.recalibrate();
+      calib_ = features::n3p::N3PCalibration{};
+      calib_.base = auto_.calibration();
+    }
+    auto_.break_window();
     reset_state();
     this->reset_front_end();
   }
@@ -232,6 +293,8 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   N3PConfig cfg_;
   Predictor pred_;
   features::n3p::N3PCalibration calib_;
+  features::AutoCalibration auto_;
+  long long calibration_changes_ = 0;
   pose::JointMap map_;
   // Direct-mode foot pinning (pose::FootLock): the ankle pinned where contact began (its own
   // height), released over 8 frames; a pin released for distance needs the contact to go off on a

@@ -108,9 +108,14 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
     reset();
   }
 
-  // --- calibration (§7), as direct mode -------------------------------------------------------
-  bool calibrate(const trackers::TrackerFrame& tpose) noexcept { return direct_.calibrate(tpose); }
+  // --- calibration (§7), as direct mode (automatic by default) ---------------------------------
+  // A calibration change (automatic or explicit) restarts the physics at the next frame: the
+  // reference changes size, and the character is placed on it at rest rather than pulled there.
+  bool calibrate(const trackers::TrackerFrame& frame) noexcept { return direct_.calibrate(frame); }
   void set_calibration(const features::n3p::N3PCalibration& c) noexcept { direct_.set_calibration(c); }
+  void recalibrate() noexcept { direct_.recalibrate(); }
+  const features::n3p::N3PCalibration& calibration() const noexcept { return direct_.calibration(); }
+  const features::CalibrationReport& calibration_report() const noexcept { return direct_.calibration_report(); }
 
   // --- running --------------------------------------------------------------------------------
   // One 30 Hz frame (the caller resampled): the direct step, 4 simulation steps, maybe a control step.
@@ -118,6 +123,10 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
     direct_.step(f, gap);
     ++this->frames_;
     if (gap) restart_ = true;
+    if (direct_.calibration_changes() != calibration_seen_) {
+      calibration_seen_ = direct_.calibration_changes();
+      restart_ = true;
+    }
     if (!direct_.has_output()) return;
     // Reference of this frame.
     retarget_.to_q(model_, direct_.pose(), q_tmp_);
@@ -140,6 +149,7 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
     recovery_.reset();
     if (control_) control_->reset();
     started_ = restart_ = false;
+    calibration_seen_ = direct_.calibration_changes();
     residual_ = {};
     stats_ = {};
     // a fresh simulator (contact and actuation state included, options kept) and torques, so that
@@ -279,6 +289,7 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
   long long sim_frame_ = 0;
   double out_time_ = 0;
   bool started_ = false, restart_ = false;
+  long long calibration_seen_ = 0;  // direct_.calibration_changes() already restarted for
   control::ResidualWrench residual_;
   control::ResidualStats stats_;
 };

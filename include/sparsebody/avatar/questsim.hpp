@@ -19,6 +19,11 @@
 // frame where the user stands upright: h = headset height / eye_height_ratio (0.936: eye height over
 // stature, Drillis & Contini 1966). The same h is the observation's o_user,scale. The height is fixed
 // for the controller's lifetime (building a model allocates); make a new controller for a new user.
+// So QuestSim has no calibration inside push(), unlike the kinematic pipelines: it has no offsets to
+// calibrate (the policy observes the devices' own frames, as its training did), and the one user
+// parameter, h, can only change by building a new avatar. For a session without a standing frame
+// at hand, run features::AutoCalibration on the stream and build the controller from its report
+// (from_calibration_report: h = the stature it found).
 // Joint "friction of 0.1" (Appendix A) is a passive viscous damping of 0.1 N m s/rad on every joint,
 // integrated implicitly by the simulator. Floor friction is the simulator's default mu = 1.0.
 //
@@ -64,6 +69,7 @@
 #include "sparsebody/character/avatar.hpp"
 #include "sparsebody/control/fall_detector.hpp"
 #include "sparsebody/control/questsim_observation.hpp"
+#include "sparsebody/features/calibration_report.hpp"
 #include "sparsebody/features/heading_frame.hpp"
 #include "sparsebody/networks/policy_nets.hpp"
 #include "sparsebody/nn/half.hpp"
@@ -107,6 +113,15 @@ class QuestSimPipeline {
     const double h = user_height_from_headset(standing, cfg);
     if (std::isnan(h)) return nullptr;
     return std::make_unique<QuestSimPipeline>(std::move(weights), h, cfg);
+  }
+
+  // The avatar for the stature an automatic calibration found (features/auto_calibration.hpp);
+  // nullptr unless the report is Calibrated.
+  static std::unique_ptr<QuestSimPipeline> from_calibration_report(std::shared_ptr<const Weights> weights,
+                                                                   const features::CalibrationReport& report,
+                                                                   QuestSimConfig cfg = {}) {
+    if (report.status != features::CalibrationStatus::Calibrated || !(report.stature > 0)) return nullptr;
+    return std::make_unique<QuestSimPipeline>(std::move(weights), report.stature, cfg);
   }
 
   // A custom model (already at the user's scale; its joint damping is used as given).

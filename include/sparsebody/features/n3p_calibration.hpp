@@ -1,14 +1,13 @@
-// Neural3Points calibration (SCA 2022, §7): the predictor's input is the pose of the user's neck/head
-// and wrists, not of the devices. From one T-pose frame the offsets between the devices and those
-// joints are measured:
-//   - orientation offsets o_k and the height scale s: the shared T-pose calibration
-//     (features/calibration.hpp: calibrated orientation q_k o_k = the body's facing frame at
-//     calibration; s = standard head height / headset height);
-//   - positional offsets d_k, in the device's own frame: in the T-pose the wrists sit where the
-//     standard skeleton's T-pose puts them relative to the head joint (arms straight out sideways,
-//     in the user's size), so d_k = q_k^-1 (p_wrist_k - p_k). The head offset stays zero: the
-//     headset is taken as the head joint, as in training (scale from its height).
-// Calibrated joint pose of tracker k: position s (p_k + q_k d_k), orientation q_k o_k.
+// Neural3Points calibration (SCA 2022, §7): the predictor's input is the pose of the user's head
+// and wrists, not of the devices. A thin layer over the shared calibration (features/calibration.hpp:
+// o_k, d_k in the calibrated frame, floor, s = standard head-joint height / the user's):
+//   - by default d_k are the device model's (features/device_model.hpp): the eye offset for the
+//     headset, the grip offsets for the controllers;
+//   - from a T-pose (when the user makes one; never required) the wrist offsets are measured: the
+//     wrists sit where the standard skeleton's T-pose puts them relative to the head joint (arms
+//     straight out sideways, in the user's size), so d_k = R_cal,k^-1 (p_k - p_wrist_k), with
+//     R_cal,k = the facing frame at that frame. The head offset stays the eye offset.
+// Calibrated joint pose of tracker k: position s (p_k - floor y - R_cal,k d_k), orientation R_cal,k.
 #pragma once
 #include <array>
 #include <cmath>
@@ -17,6 +16,7 @@
 #include <Eigen/Geometry>
 
 #include "sparsebody/features/calibration.hpp"
+#include "sparsebody/features/device_model.hpp"
 #include "sparsebody/features/n3p_tracker_input.hpp"
 #include "sparsebody/pose/skeleton.hpp"
 #include "sparsebody/features/heading_frame.hpp"
@@ -48,35 +48,38 @@ inline std::array<Eigen::Vector3d, 2> tpose_wrists(const pose::Skeleton& s) {
 }
 
 struct N3PCalibration {
-  Calibration base;                                   // o_k, s (shared T-pose calibration)
-  std::array<Eigen::Vector3d, kTrackers> offset{       // d_k, device frame, metres (user's size)
-      Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  Calibration base;            // o_k, d_k, floor, s (the shared calibration)
+  bool hand_offsets = false;   // whether d_1, d_2 were measured from a plausible T-pose
 
-  bool hand_offsets = false;  // whether d_1, d_2 were measured (a plausible T-pose)
+  // Before calibration (half-turn offsets, the device offsets, s = 1).
+  static N3PCalibration uncalibrated(const DeviceModel& d) noexcept {
+    N3PCalibration c;
+    c.base = Calibration::uncalibrated(d);
+    return c;
+  }
 
   // From a T-pose frame. False (unchanged) when the headset part cannot be used. The wrist offsets
   // are measured only when both controllers are valid and within 0.5 m of where a T-pose puts the
-  // wrists (otherwise they stay zero: the controllers are taken as the wrists, hand_offsets false).
+  // wrists (otherwise they are the device model's grip offsets, hand_offsets false).
   bool from_tpose(const trackers::TrackerFrame& f, const pose::Skeleton& skeleton, double standard_hips_height,
-                  double standard_head_height) noexcept {
+                  double standard_head_height, const DeviceModel& devices = DeviceModel{}) noexcept {
     N3PCalibration c;
     // the pelvis tracker plays no part here: calibrate orientations and scale from the headset
     trackers::TrackerFrame g = f;
     g.valid[3] = false;
-    if (!c.base.from_tpose(g, standard_hips_height, standard_head_height)) return false;
-    const Eigen::Quaterniond qh = trackers::to_eigen(f.pose[0].orientation).normalized();
-    const Eigen::Matrix3d yaw = yaw_frame(-(qh * Eigen::Vector3d::UnitZ()), Eigen::Matrix3d::Identity());
-    const Eigen::Vector3d head = trackers::to_eigen(f.pose[0].position);
+    if (!c.base.from_tpose(g, standard_hips_height, standard_head_height, devices, ScaleFrom::Head)) return false;
+    const Eigen::Matrix3d yaw = Calibration::facing(trackers::to_eigen(f.pose[0].orientation));
+    const Eigen::Vector3d head = trackers::to_eigen(f.pose[0].position) - yaw * devices.eye;  // the head joint
     const std::array<Eigen::Vector3d, 2> w = tpose_wrists(skeleton);
     bool ok = f.valid[1] && f.valid[2];
+    std::array<Eigen::Vector3d, 2> d;
     for (int k = 1; k < 3 && ok; ++k) {
-      const Eigen::Quaterniond q = trackers::to_eigen(f.pose[k].orientation).normalized();
       const Eigen::Vector3d p = trackers::to_eigen(f.pose[k].position);
       const Eigen::Vector3d wrist = head + yaw * (w[k - 1] / c.base.scale);
-      c.offset[k] = q.conjugate() * (wrist - p);
-      ok = p.allFinite() && q.coeffs().allFinite() && c.offset[k].norm() < 0.5;  // else: not a T-pose
+      d[k - 1] = yaw.transpose() * (p - wrist);  // R_cal,k = yaw at this frame
+      ok = p.allFinite() && trackers::to_eigen(f.pose[k].orientation).coeffs().allFinite() && d[k - 1].norm() < 0.5;  // else: not a T-pose
     }
-    if (!ok) c.offset[1] = c.offset[2] = Eigen::Vector3d::Zero();
+    if (ok) c.base.position_offset[1] = d[0], c.base.position_offset[2] = d[1];
     c.hand_offsets = ok;
     *this = c;
     return true;
@@ -84,8 +87,8 @@ struct N3PCalibration {
 
   // Calibrated joint sample of tracker k (k < 3) from a device pose.
   TrackerSample apply(int k, const trackers::PoseD& device) const noexcept {
-    const Eigen::Vector3d p = base.scale * (device.position + device.orientation * offset[k]);
-    return TrackerSample::from(p, (device.orientation * base.offset[k]).toRotationMatrix());
+    const trackers::PoseD j = base.apply(k, device);
+    return TrackerSample::from(j.position, j.orientation.toRotationMatrix());
   }
 };
 

@@ -222,6 +222,22 @@ inline BvhClip read_bvh(const std::string& path) {
 }
 
 // Z X Y Euler angles (degrees) of R = Rz(a) Rx(b) Ry(c).
+// The clip with its frame at `at` seconds held still for `hold` seconds (the rest follows it): a
+// performer standing still there, e.g. to give a clip without one a standing window for automatic
+// calibration (features/auto_calibration.hpp). `at` outside the clip: the clip unchanged.
+inline BvhClip with_held_frame(BvhClip c, double at, double hold) {
+  const long f = std::lround(at / c.frame_time), n = std::lround(hold / c.frame_time);
+  if (!(f >= 0 && f < c.frames) || n <= 0) return c;
+  const auto row = [&](long i) { return c.motion.begin() + static_cast<std::ptrdiff_t>(i * c.channel_count); };
+  std::vector<double> m(c.motion.begin(), row(f));
+  m.reserve(c.motion.size() + static_cast<std::size_t>(n * c.channel_count));
+  for (long i = 0; i < n; ++i) m.insert(m.end(), row(f), row(f + 1));
+  m.insert(m.end(), row(f), c.motion.end());
+  c.motion = std::move(m);
+  c.frames += static_cast<int>(n);
+  return c;
+}
+
 inline Eigen::Vector3d euler_zxy_degrees(const Eigen::Matrix3d& R) noexcept {
   // R(2,1) = sin(b); R(0,1) = -sin(a) cos(b); R(1,1) = cos(a) cos(b); R(2,0) = -cos(b) sin(c); R(2,2) = cos(b) cos(c)
   const double sb = std::max(-1.0, std::min(1.0, R(2, 1)));
@@ -243,6 +259,9 @@ class BvhWriter {
  public:
   BvhWriter(const pose::Skeleton& s, double frame_time, double offset_scale = 1.0)
       : s_(s), frame_time_(frame_time), scale_(offset_scale) {}
+
+  // The skeleton's offset scale, written with the file (e.g. the user's size known only at the end).
+  void set_offset_scale(double s) noexcept { scale_ = s; }
 
   void add(const pose::BodyPose& p, double position_scale = 1.0) {
     std::ostringstream o;

@@ -7,11 +7,22 @@
 // i.e. at the first frame every tracker's axes are the body's facing frame, which is what
 // calibration (features/calibration.hpp) makes of a user's trackers. Positions are in metres with
 // the floor (estimated from the toes) at y = 0.
+//
+// Device-realistic synthesis (synthesize_device_trackers, DeviceSynthesis): what a headset session
+// of the same motion would record. The device model (features/device_model.hpp) is applied in the
+// trackers' body-convention frame above (the calibrated frame of a calibration at frame 0):
+// headset = head + R e, grips = wrists + R g, then the OpenXR orientation convention (half a turn
+// about Y); optionally a per-session random perturbation (seeded), output at a device rate
+// (interpolating the clip), timing jitter and short tracking losses. No T-pose, no hint of the
+// calibration: a stream to calibrate automatically like a real session. Floor y = 0.
 #pragma once
 #include <algorithm>
+#include <cmath>
+#include <random>
 #include <vector>
 
 #include "sparsebody/recordings/bvh.hpp"
+#include "sparsebody/features/device_model.hpp"
 #include "sparsebody/features/heading_frame.hpp"
 #include "sparsebody/pose/joint_map.hpp"
 #include "sparsebody/trackers/types.hpp"
@@ -91,6 +102,96 @@ inline void to_openxr_convention(std::vector<TrackerFrame>& frames) noexcept {
   const Eigen::Quaterniond half(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()));
   for (auto& f : frames)
     for (auto& p : f.pose) p.orientation = to_xr(Eigen::Quaterniond(to_eigen(p.orientation) * half));
+}
+
+// Options of synthesize_device_trackers. Defaults: the device model as given, 72 Hz, no
+// perturbation, no jitter, no losses, a pelvis tracker (drop it with pelvis = false).
+struct DeviceSynthesis {
+  features::DeviceModel devices{};
+  double rate = 72.0;          // Hz of the output (the clip is interpolated); <= 0: the clip's frames
+  bool pelvis = true;          // a pelvis tracker at the hips (no offset)
+  // Per-session perturbation, drawn once from `seed` when perturb: eye offset +-2 cm per axis, grip
+  // offset length 5-12 cm with its direction turned up to 30 deg, grip rotation up to 30 deg,
+  // headset rotation up to 8 deg (how differently people wear and hold the devices).
+  bool perturb = false;
+  unsigned seed = 1;
+  double timing_jitter = 0.0;  // s: each time stamp moves by up to this (uniform), e.g. 0.002
+  double losses_per_second = 0.0;  // per tracker: short losses of 1-6 frames marked invalid
+};
+
+namespace detail {
+inline Eigen::Quaterniond random_rotation(std::mt19937& rng, double max_angle) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::uniform_real_distribution<double> u(0.0, max_angle);
+  Eigen::Vector3d axis(n(rng), n(rng), n(rng));
+  if (!(axis.norm() > 1e-9)) axis = Eigen::Vector3d::UnitY();
+  return Eigen::Quaterniond(Eigen::AngleAxisd(u(rng), axis.normalized()));
+}
+}  // namespace detail
+
+// The device stream of a clip (OpenXR conventions, floor y = 0). frames hold the device poses at
+// opt.rate; units / floor / leg as synthesize_trackers.
+inline SyntheticTrackers synthesize_device_trackers(const BvhClip& clip, const pose::JointMap& m, double units,
+                                                    const DeviceSynthesis& opt = {}) {
+  SyntheticTrackers joints = synthesize_trackers(clip, m, units);
+  features::DeviceModel d = opt.devices;
+  std::array<Eigen::Quaterniond, trackers::kTrackerCount> mount;  // the device's rotation on the body frame
+  mount.fill(Eigen::Quaterniond::Identity());
+  std::mt19937 rng(opt.seed);
+  if (opt.perturb) {
+    std::uniform_real_distribution<double> cm(-0.02, 0.02), len(0.05, 0.12);
+    d.eye += Eigen::Vector3d(cm(rng), cm(rng), cm(rng));
+    for (Eigen::Vector3d* g : {&d.grip_left, &d.grip_right})
+      if (g->norm() > 1e-9) *g = detail::random_rotation(rng, 30 * M_PI / 180) * (g->normalized() * len(rng));
+    mount[0] = detail::random_rotation(rng, 8 * M_PI / 180);
+    mount[1] = detail::random_rotation(rng, 30 * M_PI / 180);
+    mount[2] = detail::random_rotation(rng, 30 * M_PI / 180);
+  }
+  const Eigen::Quaterniond half = features::DeviceModel::default_orientation_offset();
+  // device poses per clip frame: p_dev = p_joint + R d_k, q_dev = R mount_k half (R: body-convention frame)
+  std::vector<TrackerFrame> dev = joints.frames;
+  for (auto& f : dev)
+    for (int k = 0; k < trackers::kTrackerCount; ++k) {
+      const Eigen::Quaterniond R = to_eigen(f.pose[k].orientation).normalized();
+      f.pose[k].position = to_xr(Eigen::Vector3d(to_eigen(f.pose[k].position) + R * d.offset(k)));
+      f.pose[k].orientation = to_xr(Eigen::Quaterniond(R * mount[k] * half).normalized());
+      if (k == 3) f.valid[k] = opt.pelvis;
+    }
+  SyntheticTrackers out = joints;
+  if (!(opt.rate > 0) || dev.size() < 2) {
+    out.frames = std::move(dev);
+  } else {
+    const double dt = clip.frame_time, end = (dev.size() - 1) * dt;
+    std::uniform_real_distribution<double> jit(-opt.timing_jitter, opt.timing_jitter);
+    out.frames.clear();
+    for (long i = 0;; ++i) {
+      double t = i / opt.rate;
+      if (opt.timing_jitter > 0) t = std::max(0.0, t + jit(rng));
+      if (t > end) break;
+      const double x = t / dt;
+      const std::size_t a = std::min(static_cast<std::size_t>(x), dev.size() - 2);
+      const double w = std::clamp(x - a, 0.0, 1.0);
+      TrackerFrame f;
+      f.time = t;
+      for (int k = 0; k < trackers::kTrackerCount; ++k) {
+        const auto &p0 = dev[a].pose[k], &p1 = dev[a + 1].pose[k];
+        f.pose[k].position = to_xr(Eigen::Vector3d((1 - w) * to_eigen(p0.position) + w * to_eigen(p1.position)));
+        f.pose[k].orientation = to_xr(to_eigen(p0.orientation).normalized().slerp(w, to_eigen(p1.orientation).normalized()));
+        f.valid[k] = dev[a].valid[k];
+      }
+      out.frames.push_back(f);
+    }
+  }
+  if (opt.losses_per_second > 0) {  // short losses: 1-6 frames of one tracker
+    const double rate = opt.rate > 0 ? opt.rate : 1.0 / clip.frame_time;
+    std::bernoulli_distribution start(std::min(1.0, opt.losses_per_second / rate));
+    std::uniform_int_distribution<int> length(1, 6);
+    for (int k = 0; k < trackers::kTrackerCount; ++k)
+      for (std::size_t i = 0; i < out.frames.size(); ++i)
+        if (out.frames[i].valid[k] && start(rng))
+          for (int n = length(rng); n > 0 && i < out.frames.size(); --n, ++i) out.frames[i].valid[k] = false;
+  }
+  return out;
 }
 
 }  // namespace sparsebody::recordings

@@ -1,0 +1,429 @@
+// Automatic calibration: a real headset session starts with the user walking, not in a T-pose, so
+// the calibration is taken from the moments the user stands still, found in the tracker stream.
+// Fed the sanitised model-rate frames (poses, validity, time stamps), it finds standing windows:
+//   >= min_window (1.0 s) of consecutive frames with the headset valid where the mean head speed
+//   is < 0.08 m/s and every frame's < 0.25 m/s, the head height range < 3 cm, the headset upright
+//   (its up axis has world y > 0.8) and not looking at the floor (|forward.y| < 0.5), and every
+//   valid controller >= 0.2 m below the headset, within 0.7 m of it horizontally, with a mean
+//   speed < 0.25 m/s.
+// A window grows while the user stays still and is closed when the stillness ends or it reaches
+// max_window (2.0 s; the rest of that stand is not used: one window per stand). From it:
+//   - orientation offsets o_k = q_k^-1 Yaw(headset forward) at the window's stillest frame (head
+//     plus controller speed smallest): the T-pose formula the networks were trained with (every
+//     calibrated tracker has the body's facing frame), which needs an upright user facing
+//     forward, not a T-pose;
+//   - the eye height: the median headset height over the window (above the floor);
+//   - stature = eye height / 0.936: eye height is 0.936 of stature in Winter, "Biomechanics and
+//     Motor Control of Human Movement", Fig. 4.1 (segment lengths after Drillis & Contini 1966);
+//   - s = standard head-joint height / (eye height - e.y) (features/calibration.hpp).
+// A stature outside [1.2, 2.2] m is refused (counted, not used). Later windows refine: one whose
+// eye height is > 4 cm above the estimate replaces it (the first was not fully upright), one
+// within +-4 cm is averaged in (stature; the offsets of the estimate are kept) and raises the
+// confidence, one > 4 cm lower (sitting, crouching) is skipped and counted.
+// Confidence = mean window quality x (0.7 + 0.3 agreement): quality = 0.5 min(1, length /
+// max_window) + 0.5 stillness (1 - 0.5 mean speed / 0.08 - 0.5 height range / 0.03); agreement =
+// (1 - 1/n) (1 - spread / 4 cm) for n >= 2 averaged windows, else 0. So one window gives at most
+// 0.7, agreeing windows approach 1.
+// Floor: the reference space's y = 0 (OpenXR STAGE). estimate_floor, for apps whose floor is not
+// reliable: the stature cannot be seen then, so it is assumed (assumed_stature, 1.70 m) and the
+// floor is put 0.936 x 1.70 m below the accepted standing eye height; the report says so.
+// push() returns true when calibration() changed: the pipeline then restarts its feature
+// history (like a reset), so the change gives no velocity spike. No allocation, no exception;
+// NaN or invalid frames simply break a window.
+#pragma once
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "sparsebody/features/calibration.hpp"
+#include "sparsebody/features/calibration_report.hpp"
+#include "sparsebody/features/device_model.hpp"
+#include "sparsebody/trackers/types.hpp"
+
+namespace sparsebody::features {
+
+struct AutoCalibrationConfig {
+  bool enabled = true;                 // false: no search (the default body until calibrated explicitly)
+  double min_window = 1.0;             // s of standing still for a window
+  double max_window = 2.0;             // s: a window is closed at this length
+  double mean_head_speed = 0.08;       // m/s, window mean below
+  double max_head_speed = 0.25;        // m/s, every frame below
+  double head_height_range = 0.03;     // m, window range below
+  double min_up_y = 0.8;               // headset up axis, world y above
+  double max_forward_y = 0.5;          // |headset forward, world y| below
+  double controller_below = 0.2;       // m: a valid controller at least this far below the headset
+  double controller_horizontal = 0.7;  // m: and within this horizontally
+  double controller_mean_speed = 0.25; // m/s, window mean below
+  double max_frame_gap = 0.25;         // s between consecutive frames; longer breaks a window
+  double eye_height_ratio = 0.936;     // eye height / stature (Winter, Fig. 4.1)
+  double min_stature = 1.2, max_stature = 2.2;  // m: plausible; outside is refused
+  double agreement = 0.04;             // m of eye height: same stand (average) / higher (replace) / lower (skip)
+  bool estimate_floor = false;         // floor from the standing eye height (stature assumed)
+  double assumed_stature = 1.70;       // m, with estimate_floor
+};
+
+class AutoCalibration {
+ public:
+  static constexpr int kCapacity = 256;  // frames held: 2 s up to 127 Hz (a full buffer closes the window)
+  using Poses = std::array<trackers::PoseD, trackers::kTrackerCount>;
+  using Flags = std::array<bool, trackers::kTrackerCount>;
+
+  AutoCalibration() : AutoCalibration(DeviceModel{}, 1.38) {}
+  // standard_head_height: the standard skeleton's standing head-joint height (the networks' meta).
+  // standard_hips_height: its standing hips height, where a pelvis tracker is put at calibration
+  // (DeviceModel::pelvis_from_standing; 0: the pelvis tracker keeps the device model's offset).
+  AutoCalibration(const DeviceModel& devices, double standard_head_height, AutoCalibrationConfig cfg = {},
+                  double standard_hips_height = 0) noexcept
+      : cfg_(cfg), devices_(devices), standard_head_(standard_head_height), standard_hips_(standard_hips_height) {
+    recalibrate();
+  }
+
+  // One model frame (after the sanitizer): poses and which were measured this frame. True when
+  // calibration() changed.
+  bool push(double time, const Poses& pose, const Flags& valid) noexcept {
+    ++frame_;
+    if (!searching()) return false;
+    Sample s;
+    const bool ok = qualify(time, pose, valid, s);
+    remember(time, pose, valid);
+    if (!ok) return end_run();
+    if (held_ == kCapacity) {  // full: close the window before its first frame is dropped
+      if (seg_active_ && seg_start_ == run_ - held_) {
+        const bool changed = close_window();
+        used_stand_ = true;
+        append(s);
+        return changed;
+      }
+    }
+    append(s);
+    long long start = 0;
+    WindowStats w;
+    const bool still = trailing_window(start, w);
+    if (!still) {
+      used_stand_ = false;
+      return seg_active_ ? close_window() : false;
+    }
+    if (used_stand_) return false;
+    if (!seg_active_) seg_active_ = true, seg_start_ = start;
+    seg_end_ = run_ - 1;
+    if (at(seg_end_).t - at(seg_start_).t >= cfg_.max_window - 1e-9) {
+      used_stand_ = true;
+      return close_window();
+    }
+    return false;
+  }
+
+  // Forget everything (estimate, counters, an explicit calibration) and search again: after the
+  // user sat down, or handed the headset on.
+  void recalibrate() noexcept {
+    manual_ = false;
+    est_n_ = 0;
+    frame_ = 0;
+    calib_ = Calibration::uncalibrated(devices_);
+    report_ = CalibrationReport{};
+    report_.stature = default_stature();
+    report_.eye_height = default_stature() * cfg_.eye_height_ratio;
+    std::snprintf(report_.message, sizeof report_.message, "%s: default body (stature %.2f m)",
+                  cfg_.enabled ? "no standing frame yet" : "automatic calibration off", report_.stature);
+    break_window();
+  }
+
+  // A time discontinuity (reset, gap): the current window ends without being used.
+  void break_window() noexcept {
+    held_ = 0;
+    run_ = 0;
+    seg_active_ = used_stand_ = false;
+    prev_valid_.fill(false);
+    have_prev_time_ = false;
+  }
+
+  // An explicit calibration (a T-pose or a chosen standing frame, or set by the application):
+  // used as given, the search stops until recalibrate(). time: of the frame used (NaN: none).
+  void set_explicit(const Calibration& c, CalibrationSource source, double time = std::numeric_limits<double>::quiet_NaN()) noexcept {
+    manual_ = true;
+    calib_ = c;
+    CalibrationReport r;
+    r.status = CalibrationStatus::Calibrated;
+    r.source = source;
+    r.first_time = r.last_time = time;
+    if (std::isfinite(time)) r.first_frame = r.last_frame = frame_;
+    r.scale = c.scale;
+    r.floor = c.floor;
+    r.eye_height = (std::isfinite(c.scale) && c.scale > 0 ? standard_head_ / c.scale : standard_head_) + devices_.eye.y();
+    r.stature = r.eye_height / cfg_.eye_height_ratio;
+    r.confidence = source == CalibrationSource::Explicit ? 0.5 : 1.0;
+    r.windows = 0;
+    if (source == CalibrationSource::Explicit)
+      std::snprintf(r.message, sizeof r.message, "explicit: one frame at %.2f s, stature %.2f m", time, r.stature);
+    else
+      std::snprintf(r.message, sizeof r.message, "set by the application: scale %.3f (stature ~%.2f m)", c.scale, r.stature);
+    report_ = r;
+    break_window();
+  }
+
+  // Calibrate from one given frame (T-pose or standing: upright, facing forward) with the device
+  // model and the head-based scale; the search stops until recalibrate(). False (unchanged) when
+  // the frame cannot be used.
+  bool calibrate_from(const trackers::TrackerFrame& f, double standard_hips_height = 0) noexcept {
+    Calibration c;
+    if (!c.from_tpose(f, standard_hips_height > 0 ? standard_hips_height : standard_hips_, standard_head_, devices_,
+                      ScaleFrom::Head))
+      return false;
+    set_explicit(c, CalibrationSource::Explicit, f.time);
+    return true;
+  }
+
+  bool searching() const noexcept { return cfg_.enabled && !manual_; }
+  bool manual() const noexcept { return manual_; }  // an explicit calibration is in use
+  const Calibration& calibration() const noexcept { return calib_; }
+  const CalibrationReport& report() const noexcept { return report_; }
+  const AutoCalibrationConfig& config() const noexcept { return cfg_; }
+  const DeviceModel& devices() const noexcept { return devices_; }
+  double standard_head_height() const noexcept { return standard_head_; }
+  // The default body (s = 1): the standard skeleton's head joint plus the eye offset, / 0.936.
+  double default_stature() const noexcept { return (standard_head_ + devices_.eye.y()) / cfg_.eye_height_ratio; }
+
+ private:
+  struct Sample {
+    double t = 0;
+    long long frame = 0;
+    Eigen::Vector3d head = Eigen::Vector3d::Zero();
+    double pelvis_y = 0;  // the pelvis tracker's height (when valid[3])
+    double head_speed = 0;
+    std::array<double, 2> ctl_speed{};
+    std::array<bool, 2> ctl_speed_valid{};
+    std::array<Eigen::Quaterniond, trackers::kTrackerCount> q;
+    Flags valid{};
+  };
+  struct WindowStats {
+    double mean_speed = 0, range = 0;
+  };
+
+  static bool finite(const trackers::PoseD& p) noexcept { return p.position.allFinite() && p.orientation.coeffs().allFinite(); }
+
+  // The per-frame conditions; fills s. Needs the previous frame's headset (for its speed).
+  bool qualify(double time, const Poses& pose, const Flags& valid, Sample& s) const noexcept {
+    if (!std::isfinite(time) || !valid[0] || !finite(pose[0])) return false;
+    const double dt = time - prev_time_;
+    if (!have_prev_time_ || !prev_valid_[0] || !(dt > 0) || dt > cfg_.max_frame_gap) return false;
+    const Eigen::Quaterniond qh = pose[0].orientation.normalized();
+    const Eigen::Matrix3d R = qh.toRotationMatrix();
+    if (!(R(1, 1) > cfg_.min_up_y) || !(std::abs(R(1, 2)) < cfg_.max_forward_y)) return false;  // up.y, forward.y = -Z.y
+    const Eigen::Vector3d& p = pose[0].position;
+    s.head_speed = (p - prev_pos_[0]).norm() / dt;
+    if (!(s.head_speed < cfg_.max_head_speed)) return false;
+    for (int c = 0; c < 2; ++c) {
+      const int k = 1 + c;
+      s.ctl_speed_valid[c] = false;
+      if (!valid[k] || !finite(pose[k])) continue;
+      const Eigen::Vector3d d = pose[k].position - p;
+      if (!(-d.y() >= cfg_.controller_below) || !(std::hypot(d.x(), d.z()) <= cfg_.controller_horizontal)) return false;
+      if (prev_valid_[k]) {
+        s.ctl_speed[c] = (pose[k].position - prev_pos_[k]).norm() / dt;
+        s.ctl_speed_valid[c] = std::isfinite(s.ctl_speed[c]);
+      }
+    }
+    s.t = time;
+    s.frame = frame_ - 1;
+    s.head = p;
+    s.pelvis_y = pose[3].position.y();
+    for (int k = 0; k < trackers::kTrackerCount; ++k) {
+      s.valid[k] = valid[k] && finite(pose[k]);
+      s.q[k] = s.valid[k] ? pose[k].orientation : Eigen::Quaterniond::Identity();
+    }
+    return true;
+  }
+
+  void remember(double time, const Poses& pose, const Flags& valid) noexcept {
+    if (!std::isfinite(time)) return;
+    prev_time_ = time;
+    have_prev_time_ = true;
+    for (int k = 0; k < trackers::kTrackerCount; ++k) {
+      prev_valid_[k] = valid[k] && finite(pose[k]);
+      if (prev_valid_[k]) prev_pos_[k] = pose[k].position;
+    }
+  }
+
+  // A frame that does not qualify: the run ends, an open window is closed.
+  bool end_run() noexcept {
+    const bool changed = seg_active_ ? close_window() : false;
+    held_ = 0;
+    run_ = 0;
+    used_stand_ = false;
+    return changed;
+  }
+
+  void append(const Sample& s) noexcept {
+    ring_[static_cast<std::size_t>(run_ % kCapacity)] = s;
+    ++run_;
+    held_ = std::min(held_ + 1, kCapacity);
+  }
+  const Sample& at(long long a) const noexcept { return ring_[static_cast<std::size_t>(a % kCapacity)]; }
+
+  // The shortest trailing window spanning min_window; true when it passes the stillness tests.
+  bool trailing_window(long long& start, WindowStats& w) const noexcept {
+    const long long newest = run_ - 1, oldest = run_ - held_;
+    const double t1 = at(newest).t;
+    long long a = newest;
+    while (a > oldest && t1 - at(a).t < cfg_.min_window - 1e-9) --a;
+    if (t1 - at(a).t < cfg_.min_window - 1e-9) return false;
+    start = a;
+    double sum = 0, lo = std::numeric_limits<double>::infinity(), hi = -lo, cs[2] = {0, 0};
+    int cn[2] = {0, 0};
+    const long long n = newest - a + 1;
+    for (long long i = a; i <= newest; ++i) {
+      const Sample& s = at(i);
+      sum += s.head_speed;
+      lo = std::min(lo, s.head.y());
+      hi = std::max(hi, s.head.y());
+      for (int c = 0; c < 2; ++c)
+        if (s.ctl_speed_valid[c]) cs[c] += s.ctl_speed[c], ++cn[c];
+    }
+    w.mean_speed = sum / double(n);
+    w.range = hi - lo;
+    if (!(w.mean_speed < cfg_.mean_head_speed) || !(w.range < cfg_.head_height_range)) return false;
+    for (int c = 0; c < 2; ++c)
+      if (cn[c] > 0 && !(cs[c] / cn[c] < cfg_.controller_mean_speed)) return false;
+    return true;
+  }
+
+  // The open window [seg_start_, seg_end_] becomes an estimate (or is refused / skipped).
+  bool close_window() noexcept {
+    seg_active_ = false;
+    const long long a0 = seg_start_, a1 = seg_end_;
+    const int n = static_cast<int>(a1 - a0 + 1);
+    if (n < 2) return false;
+    double sum = 0, lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    std::array<long long, trackers::kTrackerCount> best{};
+    std::array<double, trackers::kTrackerCount> best_score;
+    best_score.fill(std::numeric_limits<double>::infinity());
+    for (long long i = a0; i <= a1; ++i) {
+      const Sample& s = at(i);
+      heights_[static_cast<std::size_t>(i - a0)] = s.head.y();
+      sum += s.head_speed;
+      lo = std::min(lo, s.head.y());
+      hi = std::max(hi, s.head.y());
+      double score = s.head_speed;
+      for (int c = 0; c < 2; ++c)
+        if (s.ctl_speed_valid[c]) score += s.ctl_speed[c];
+      for (int k = 0; k < trackers::kTrackerCount; ++k)
+        if (s.valid[k] && score < best_score[k]) best_score[k] = score, best[k] = i;
+    }
+    double* h = heights_.data();
+    std::nth_element(h, h + n / 2, h + n);
+    double eye_raw = h[n / 2];
+    if (n % 2 == 0) eye_raw = 0.5 * (eye_raw + *std::max_element(h, h + n / 2));
+    const double duration = at(a1).t - at(a0).t;
+    const double mean_speed = sum / n, range = hi - lo;
+    const double stillness = std::clamp(1 - 0.5 * mean_speed / cfg_.mean_head_speed - 0.5 * range / cfg_.head_height_range, 0.0, 1.0);
+    const double quality = 0.5 * std::min(1.0, duration / cfg_.max_window) + 0.5 * stillness;
+    const double stature = cfg_.estimate_floor ? cfg_.assumed_stature : eye_raw / cfg_.eye_height_ratio;
+    const bool have = est_n_ > 0;
+    const double diff = have ? eye_raw - est_eye_ : 0.0;
+    if (have && diff < -cfg_.agreement) {  // lower: sitting or crouching
+      ++report_.skipped;
+      describe();
+      return false;
+    }
+    if (!(stature >= cfg_.min_stature && stature <= cfg_.max_stature)) {
+      ++report_.refused;
+      if (!have) {
+        report_.status = CalibrationStatus::Refused;
+        report_.first_frame = at(a0).frame, report_.last_frame = at(a1).frame;
+        report_.first_time = at(a0).t, report_.last_time = at(a1).t;
+        std::snprintf(report_.message, sizeof report_.message,
+                      "refused: standing at %.1f-%.1f s gives stature %.2f m, outside [%.2f, %.2f] m: default body (stature %.2f m)",
+                      at(a0).t, at(a1).t, stature, cfg_.min_stature, cfg_.max_stature, default_stature());
+      } else {
+        describe();
+      }
+      return false;
+    }
+    if (!have || diff > cfg_.agreement) {  // first, or higher: (re)place the estimate
+      if (have) ++report_.replaced;
+      est_n_ = 1;
+      est_eye_ = eye_raw;
+      est_lo_ = est_hi_ = eye_raw;
+      est_quality_ = quality;
+      Calibration c = Calibration::uncalibrated(devices_);
+      for (int k = 0; k < trackers::kTrackerCount; ++k) {
+        if (!std::isfinite(best_score[k])) continue;
+        const Sample& s = at(best[k]);
+        c.offset[k] = Eigen::Quaterniond(s.q[k].normalized().toRotationMatrix().transpose() * Calibration::facing(s.q[0]));
+      }
+      calib_ = c;
+    } else {  // the same stand height: averaged in
+      est_eye_ = (est_eye_ * est_n_ + eye_raw) / (est_n_ + 1);
+      est_quality_ = (est_quality_ * est_n_ + quality) / (est_n_ + 1);
+      est_lo_ = std::min(est_lo_, eye_raw);
+      est_hi_ = std::max(est_hi_, eye_raw);
+      ++est_n_;
+    }
+    calib_.floor = cfg_.estimate_floor ? est_eye_ - cfg_.eye_height_ratio * cfg_.assumed_stature : 0.0;
+    const double eye = est_eye_ - calib_.floor;
+    calib_.scale = standard_head_ / (eye - devices_.eye.y());
+    if (std::isfinite(best_score[3])) calib_.set_pelvis_height(at(best[3]).pelvis_y, standard_hips_, devices_);
+    const double agree = est_n_ >= 2 ? (1 - 1.0 / est_n_) * std::max(0.0, 1 - (est_hi_ - est_lo_) / cfg_.agreement) : 0.0;
+    CalibrationReport& r = report_;
+    r.status = CalibrationStatus::Calibrated;
+    r.source = CalibrationSource::Automatic;
+    r.first_frame = at(a0).frame, r.last_frame = at(a1).frame;
+    r.first_time = at(a0).t, r.last_time = at(a1).t;
+    r.eye_height = eye;
+    r.stature = eye / cfg_.eye_height_ratio;
+    r.scale = calib_.scale;
+    r.floor = calib_.floor;
+    r.floor_estimated = cfg_.estimate_floor;
+    r.confidence = std::clamp(est_quality_ * (0.7 + 0.3 * agree), 0.0, 1.0);
+    r.windows = est_n_;
+    describe();
+    return true;
+  }
+
+  // The one-line message of a calibrated report (with the windows not used, if any).
+  void describe() noexcept {
+    CalibrationReport& r = report_;
+    if (r.status != CalibrationStatus::Calibrated || r.source != CalibrationSource::Automatic) {
+      if (r.status == CalibrationStatus::Default)
+        std::snprintf(r.message, sizeof r.message, "no standing frame yet: default body (stature %.2f m)", default_stature());
+      return;
+    }
+    char extra[96] = "";
+    if (r.skipped || r.refused)
+      std::snprintf(extra, sizeof extra, "; not used: %d lower (sitting?), %d implausible", r.skipped, r.refused);
+    if (r.floor_estimated)
+      std::snprintf(r.message, sizeof r.message, "automatic: standing at %.1f-%.1f s, floor estimated at y = %.2f m (stature assumed %.2f m), %d window%s%s",
+                    r.first_time, r.last_time, r.floor, r.stature, r.windows, r.windows == 1 ? "" : "s", extra);
+    else
+      std::snprintf(r.message, sizeof r.message, "automatic: standing at %.1f-%.1f s, stature %.2f m, confidence %.2f, %d window%s%s",
+                    r.first_time, r.last_time, r.stature, r.confidence, r.windows, r.windows == 1 ? "" : "s", extra);
+  }
+
+  AutoCalibrationConfig cfg_;
+  DeviceModel devices_;
+  double standard_head_ = 1.38;
+  double standard_hips_ = 0;
+  bool manual_ = false;
+  Calibration calib_;
+  CalibrationReport report_;
+  long long frame_ = 0;  // frames pushed since construction / recalibrate()
+  // the previous frame (speeds)
+  bool have_prev_time_ = false;
+  double prev_time_ = 0;
+  Flags prev_valid_{};
+  std::array<Eigen::Vector3d, trackers::kTrackerCount> prev_pos_{};
+  // the current run of qualifying frames (ring) and its open window
+  std::array<Sample, kCapacity> ring_{};
+  std::array<double, kCapacity> heights_{};
+  long long run_ = 0;  // frames appended to the run
+  int held_ = 0;       // of which the ring holds the newest
+  bool seg_active_ = false, used_stand_ = false;
+  long long seg_start_ = 0, seg_end_ = 0;
+  // the estimate
+  int est_n_ = 0;
+  double est_eye_ = 0, est_lo_ = 0, est_hi_ = 0, est_quality_ = 0;
+};
+
+}  // namespace sparsebody::features

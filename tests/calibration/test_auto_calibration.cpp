@@ -1,0 +1,242 @@
+// Automatic calibration from standing windows (features/auto_calibration.hpp) on synthetic headset
+// sessions: when a window is found, what it gives, refinement, refusal, and broken windows.
+#include <doctest/doctest.h>
+
+#include <cstring>
+#include <limits>
+#include <string>
+
+#include "sparsebody/avatar/lobstr_pipeline.hpp"
+#include "sparsebody/features/auto_calibration.hpp"
+#include "support/standing_stream.hpp"
+
+using namespace sparsebody;
+using sparsebody_test::Phase;
+
+namespace {
+constexpr double kStdHead = 1.38;
+
+// Feeds frames (already at the model rate) to a calibrator as a pipeline does after its sanitizer.
+struct Feeder {
+  features::AutoCalibration cal;
+  int changes = 0;
+  explicit Feeder(features::AutoCalibrationConfig cfg = {}) : cal(features::DeviceModel{}, kStdHead, cfg) {}
+  void feed(const trackers::TrackerFrame& f) {
+    std::array<trackers::PoseD, trackers::kTrackerCount> p;
+    std::array<bool, trackers::kTrackerCount> v;
+    for (int k = 0; k < trackers::kTrackerCount; ++k) {
+      p[k].position = trackers::to_eigen(f.pose[k].position);
+      p[k].orientation = trackers::to_eigen(f.pose[k].orientation);
+      v[k] = f.valid[k];
+    }
+    changes += cal.push(f.time, p, v);
+  }
+  void feed(const std::vector<trackers::TrackerFrame>& fs) {
+    for (const auto& f : fs) feed(f);
+  }
+  const features::CalibrationReport& r() const { return cal.report(); }
+};
+
+bool finite(const features::Calibration& c) {
+  bool ok = std::isfinite(c.scale) && std::isfinite(c.floor);
+  for (int k = 0; k < 4; ++k) ok &= c.offset[k].coeffs().allFinite() && c.position_offset[k].allFinite();
+  return ok;
+}
+}  // namespace
+
+TEST_CASE("auto calibration: standing still 2 s then walking is calibrated from the stand") {
+  Feeder f;
+  f.feed(sparsebody_test::session({{Phase::Stand, 2.0, 1.65}, {Phase::Walk, 3.0, 1.65}}));
+  const auto& r = f.r();
+  CHECK(r.status == features::CalibrationStatus::Calibrated);
+  CHECK(r.source == features::CalibrationSource::Automatic);
+  CHECK(f.changes == 1);
+  CHECK(r.first_time >= 0.0);
+  CHECK(r.last_time <= 2.0);
+  CHECK(r.last_time - r.first_time >= 1.0 - 1e-9);
+  CHECK(r.eye_height == doctest::Approx(1.65).epsilon(0.002).scale(0));
+  CHECK(r.stature == doctest::Approx(1.65 / 0.936).epsilon(0.002).scale(0));
+  CHECK(f.cal.calibration().scale == doctest::Approx(kStdHead / (1.65 - 0.08)).epsilon(0.002).scale(0));
+  CHECK(r.confidence > 0.4);
+  CHECK(r.confidence <= 0.7 + 1e-9);  // one window
+  CHECK(std::string(r.message).find("automatic: standing at") == 0);
+  // orientation offsets: every calibrated tracker has the body's facing frame at the window
+  const auto fr = sparsebody_test::session({{Phase::Stand, 0.1, 1.65}})[0];
+  const Eigen::Matrix3d facing = features::Calibration::facing(trackers::to_eigen(fr.pose[0].orientation));
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Matrix3d R = (trackers::to_eigen(fr.pose[k].orientation) * f.cal.calibration().offset[k]).toRotationMatrix();
+    CHECK((R - facing).norm() < 1e-3);
+  }
+  CHECK(facing.col(2).dot(Eigen::Vector3d(-std::sin(0.3), 0, -std::cos(0.3))) > 0.999);  // Z = where the user looks
+}
+
+TEST_CASE("auto calibration: walking from frame 0, standing at 5 s") {
+  Feeder f;
+  const auto walk = sparsebody_test::session({{Phase::Walk, 5.0, 1.70}, {Phase::Stand, 3.0, 1.70}});
+  for (std::size_t i = 0; i < walk.size(); ++i) {
+    f.feed(walk[i]);
+    if (walk[i].time < 5.9) REQUIRE(f.r().status == features::CalibrationStatus::Default);
+  }
+  CHECK(f.r().status == features::CalibrationStatus::Calibrated);
+  CHECK(f.r().first_time >= 5.0 - 1e-9);
+  CHECK(f.r().stature == doctest::Approx(1.70 / 0.936).epsilon(0.002).scale(0));
+}
+
+TEST_CASE("auto calibration: refinement - higher replaces, same is averaged, lower (sitting) is skipped") {
+  Feeder f;
+  f.feed(sparsebody_test::session({{Phase::Stand, 2.0, 1.60},   // slouched at first
+                                   {Phase::Walk, 1.0, 1.60},
+                                   {Phase::Stand, 2.0, 1.66},   // upright: replaces
+                                   {Phase::Walk, 1.0, 1.66},
+                                   {Phase::Stand, 2.0, 1.67},   // the same stand height: averaged
+                                   {Phase::Walk, 1.0, 1.67},
+                                   {Phase::Stand, 3.0, 1.20},   // sitting: skipped
+                                   {Phase::Walk, 1.0, 1.66}}));
+  const auto& r = f.r();
+  CHECK(r.status == features::CalibrationStatus::Calibrated);
+  CHECK(r.replaced == 1);
+  CHECK(r.windows == 2);
+  CHECK(r.skipped == 1);
+  CHECK(f.changes == 3);
+  CHECK(r.eye_height == doctest::Approx(1.665).epsilon(0.002).scale(0));
+  CHECK(r.confidence > 0.7);  // two agreeing windows
+  CHECK(std::string(r.message).find("1 lower") != std::string::npos);
+}
+
+TEST_CASE("auto calibration: a 2.5 m giant is refused, the default body stays") {
+  Feeder f;
+  const double eye = 2.5 * 0.936;
+  f.feed(sparsebody_test::session({{Phase::Stand, 2.0, eye}, {Phase::Walk, 1.0, eye}}));
+  const auto& r = f.r();
+  CHECK(r.status == features::CalibrationStatus::Refused);
+  CHECK(r.refused == 1);
+  CHECK(f.changes == 0);
+  CHECK(f.cal.calibration().scale == 1.0);
+  const std::string m = r.message;
+  CHECK(m.find("refused") == 0);
+  CHECK(m.find("2.50 m") != std::string::npos);
+  CHECK(m.find("[1.20, 2.20] m") != std::string::npos);
+}
+
+TEST_CASE("auto calibration: no standing at all is the documented default body") {
+  Feeder f;
+  f.feed(sparsebody_test::session({{Phase::Walk, 10.0, 1.65}}));
+  const auto& r = f.r();
+  CHECK(r.status == features::CalibrationStatus::Default);
+  CHECK(r.source == features::CalibrationSource::None);
+  CHECK(r.stature == doctest::Approx((kStdHead + 0.08) / 0.936));
+  CHECK(f.cal.calibration().scale == 1.0);
+  const Eigen::Quaterniond half = features::DeviceModel::default_orientation_offset();
+  for (int k = 0; k < 4; ++k) CHECK(f.cal.calibration().offset[k].angularDistance(half) < 1e-12);
+  CHECK((f.cal.calibration().position_offset[0] - Eigen::Vector3d(0, 0.08, 0.10)).norm() == 0.0);
+  CHECK((f.cal.calibration().position_offset[1] - Eigen::Vector3d(0, -0.08, 0.03)).norm() == 0.0);
+  CHECK(std::string(r.message).find("no standing frame yet: default body (stature") == 0);
+}
+
+TEST_CASE("auto calibration: NaN bursts and a lost headset break a window, no NaN comes out") {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int kind = 0; kind < 3; ++kind) {
+    INFO("kind " << kind);
+    Feeder f;
+    // 2.5 s standing with a break every 0.8 s: never 1 s of consecutive still frames
+    auto s = sparsebody_test::session({{Phase::Stand, 2.5, 1.65}});
+    for (std::size_t i = 0; i < s.size(); ++i)
+      if (i % 24 == 23) {
+        if (kind == 0) s[i].pose[0].position.y = nan;
+        if (kind == 1) s[i].valid[0] = false;
+        if (kind == 2) s[i].pose[0].orientation = {nan, nan, nan, nan};
+        if (kind == 0) s[i].pose[1].orientation.w = nan;  // also a NaN controller (ignored: not valid data)
+      }
+    f.feed(s);
+    CHECK(f.r().status == features::CalibrationStatus::Default);
+    CHECK(finite(f.cal.calibration()));
+    // the same session without breaks calibrates
+    Feeder g;
+    g.feed(sparsebody_test::session({{Phase::Stand, 2.5, 1.65}}));
+    CHECK(g.r().status == features::CalibrationStatus::Calibrated);
+  }
+  // a controller held up at the head (not standing relaxed) is no standing window either
+  Feeder h;
+  auto s = sparsebody_test::session({{Phase::Stand, 3.0, 1.65}});
+  for (auto& fr : s) fr.pose[1].position.y = fr.pose[0].position.y - 0.05f;
+  h.feed(s);
+  CHECK(h.r().status == features::CalibrationStatus::Default);
+}
+
+TEST_CASE("auto calibration: a frame looking at the floor or tilted is not standing") {
+  Feeder f;
+  auto s = sparsebody_test::session({{Phase::Stand, 3.0, 1.65}});
+  const Eigen::Quaterniond down(Eigen::AngleAxisd(-0.7, Eigen::Vector3d::UnitX()));  // pitched 40 deg down
+  for (auto& fr : s) fr.pose[0].orientation = trackers::to_xr(Eigen::Quaterniond(trackers::to_eigen(fr.pose[0].orientation) * down));
+  f.feed(s);
+  CHECK(f.r().status == features::CalibrationStatus::Default);
+}
+
+TEST_CASE("auto calibration: recalibrate() forgets and searches again; explicit calibration stops the search") {
+  Feeder f;
+  f.feed(sparsebody_test::session({{Phase::Stand, 2.0, 1.80}, {Phase::Walk, 1.0, 1.80}}));
+  REQUIRE(f.r().status == features::CalibrationStatus::Calibrated);
+  f.cal.recalibrate();
+  CHECK(f.r().status == features::CalibrationStatus::Default);
+  CHECK(f.cal.calibration().scale == 1.0);
+  f.feed(sparsebody_test::session({{Phase::Stand, 2.0, 1.55}, {Phase::Walk, 1.0, 1.55}}));  // another user
+  CHECK(f.r().status == features::CalibrationStatus::Calibrated);
+  CHECK(f.r().stature == doctest::Approx(1.55 / 0.936).epsilon(0.002).scale(0));
+  // an explicit frame: used as given, no more automatic changes
+  const auto one = sparsebody_test::session({{Phase::Stand, 0.1, 1.70}})[0];
+  REQUIRE(f.cal.calibrate_from(one));
+  CHECK(f.r().source == features::CalibrationSource::Explicit);
+  CHECK(f.cal.calibration().scale == doctest::Approx(kStdHead / (1.70 - 0.08)));
+  const int before = f.changes;
+  f.feed(sparsebody_test::session({{Phase::Stand, 3.0, 1.90}}));
+  CHECK(f.changes == before);
+  CHECK(f.r().source == features::CalibrationSource::Explicit);
+}
+
+TEST_CASE("auto calibration: estimate_floor puts the floor under the standing eye height (stature assumed)") {
+  features::AutoCalibrationConfig cfg;
+  cfg.estimate_floor = true;
+  Feeder f(cfg);
+  auto s = sparsebody_test::session({{Phase::Stand, 2.0, 1.62}, {Phase::Walk, 1.0, 1.62}});
+  for (auto& fr : s)
+    for (auto& p : fr.pose) p.position.y += 0.9f;  // an app whose origin is at the waist
+  f.feed(s);
+  const auto& r = f.r();
+  REQUIRE(r.status == features::CalibrationStatus::Calibrated);
+  CHECK(r.floor_estimated);
+  CHECK(r.floor == doctest::Approx(1.62 + 0.9 - 0.936 * 1.70).epsilon(0.002).scale(0));
+  CHECK(r.stature == doctest::Approx(1.70));
+  CHECK(std::string(r.message).find("floor estimated") != std::string::npos);
+}
+
+TEST_CASE("LoBSTr pipeline: automatic by default, the calibration change restarts the feature history") {
+  using P = avatar::LoBSTrPipeline<float, 32, 16>;
+  static auto w = P::load(std::string(SPARSEBODY_SOURCE_DIR) + "/tests/pipeline/golden/lobstr_pipeline_small.weights.json");
+  P p(w);
+  CHECK(p.calibration_report().status == features::CalibrationStatus::Default);
+  CHECK(p.user_scale() == 1.0);
+  const auto s = sparsebody_test::session({{Phase::Walk, 2.0, 1.75}, {Phase::Stand, 2.5, 1.75}, {Phase::Walk, 2.0, 1.75}});
+  bool changed_seen = false;
+  for (const auto& f : s) {
+    const auto before = p.calibration_report().status;
+    p.push(f);
+    if (before != p.calibration_report().status) {
+      changed_seen = true;
+      // the frame the calibration changed on: velocity features restarted at zero (no spike)
+      for (int k = 0; k < 3; ++k) CHECK(p.features()[k] == 0.0f);
+      for (int k = 0; k < 3; ++k) CHECK(p.features()[9 + k] == 0.0f);
+    }
+  }
+  CHECK(changed_seen);
+  CHECK(p.calibration_report().status == features::CalibrationStatus::Calibrated);
+  CHECK(p.user_scale() == doctest::Approx((1.75 - 0.08) / p.meta().standing_head_height).epsilon(0.003).scale(0));
+  p.recalibrate();
+  CHECK(p.calibration_report().status == features::CalibrationStatus::Default);
+  CHECK(p.user_scale() == 1.0);
+  for (const auto& f : s) {
+    trackers::TrackerFrame g = f;
+    g.time += 10.0;
+    p.push(g);
+  }
+  CHECK(p.calibration_report().status == features::CalibrationStatus::Calibrated);
+}
