@@ -34,6 +34,11 @@ from .lobstr.standard import STANDARD
 EYE = np.array([0.0, 0.08, 0.10])
 GRIP = np.array([0.0, -0.08, 0.03])
 NOMINAL = [EYE, GRIP, GRIP]                   # head, hand_l, hand_r
+# The standard performer's pelvis tracker frame at standing relative to the facing frame (chordal
+# mean over every 5th training clip's first frame: a ~3 deg tilt; per clip it varies by 4.5 deg
+# median around this). The runtime calibrates a belt tracker, whatever its mounting, to this frame at
+# the standing frame (C++ DeviceModel::pelvis_standing); the device realisations do the same.
+PELVIS_STANDING = np.array([[0.9996, 0.0299, 0.0], [-0.0298, 0.9986, 0.0435], [0.0013, -0.0434, 0.9991]])
 EYE_TO_STATURE = 0.936                        # eye height / stature (Winter, Fig. 4.1; Drillis & Contini 1966)
 # the standard performer's stature by that ratio (standing head joint + eye offset)
 STANDARD_STATURE = (STANDARD["standing_head_height"] + EYE[1]) / EYE_TO_STATURE
@@ -137,6 +142,10 @@ def device_trackers(clip, aug, noise=True):
     for k in range(3):
         P[:, k] += np.einsum("fij,j->fi", Q[:, k], user[k]) - np.einsum("fij,j->fi", Qe[:, k], NOMINAL[k])
     P[:, 3] += np.einsum("fij,j->fi", Q[:, 3], aug.belt)
+    if aug.devices:
+        # the belt tracker calibrated at the calibration frame (its mounting is unknown): the facing
+        # frame (the headset's, Q[0, 0]) times the standard standing tilt, then the calibration error
+        Qe[:, 3] = Q[:, 3] @ (Q[0, 3].T @ Q[0, 0] @ orthonormal(PELVIS_STANDING)) @ aug.err[3]
     Q = Qe
     s = STANDARD["standing_head_height"] / max(eye_y - EYE[1], 0.3) * aug.scale_err
     # the runtime calibration puts a belt tracker at the standard standing hips height (in the

@@ -2,12 +2,15 @@
 against the clip that drove it, the same way for every input path:
 
   nominal  validation BVH, trackers synthesised at the joints (the in-distribution setting)
-  devices  validation BVH, device-realistic trackers (eye point, grips, losses, 72 Hz) and automatic
-           calibration, as a real session (the demo's --devices)
+  devices  validation BVH, device-realistic trackers (eye point, grips, per-clip random user offsets,
+           jitter, losses, 72 Hz: the demo's --devices --device-seed) and automatic calibration, as a
+           session that starts with the user standing for 2.5 s (--devices-stand 0: the clip's first
+           frame held; the held frames are compared with that frame)
   s155, s190, longlegs, shortlegs   the same on validation clips retargeted to other bodies
            (weights_tool/bodies.py presets)
   csv      the device-realistic stream written as the demo's tracker CSV (--trackers-out) and read
-           back through the CSV path with default options (no T-pose, walking from frame 0)
+           back through the CSV path with default options: no T-pose, the user moving from the first
+           frame (the default body until then) and standing 2.5 s half-way through the clip
   cmu      the CMU clips of Debian's assimp-testmodels (another performer, another skeleton)
 
 Metrics (12 joints mapped by role: hips, head, hands, thighs, knees, ankles, toes; metres -> cm):
@@ -24,6 +27,7 @@ Metrics (12 joints mapped by role: hips, head, hands, thighs, knees, ankles, toe
         [--models lobstr n3p] [--every 5] [--json out.json] [-- extra demo options]
 """
 import argparse
+import copy
 import glob
 import json
 import os
@@ -71,11 +75,23 @@ def still_mask(truth, P, fps, speed=0.05, seconds=0.5):
     return out
 
 
-def compare(out_bvh, truth_bvh, truth_units=None, out_units=0.01):
+def compare(out_bvh, truth_bvh, truth_units=None, out_units=0.01, hold=None):
     """Per-frame sums of the metrics of one run (dict of (sum, count)). The demo writes centimetres;
-    the clip's units are guessed from its leg length unless given."""
+    the clip's units are guessed from its leg length unless given. hold = (at, seconds): the run held
+    the clip's frame at `at` s for `seconds` (the demo's --devices-stand): the output's held frames
+    are compared with that frame, the rest with the clip one to one."""
     out, truth = Clip(out_bvh, units=out_units), Clip(truth_bvh, units=truth_units)
     fps = truth.fps
+    if hold is not None and abs(truth.fps - 30.0) < 0.5:
+        f0, nh = int(round(hold[0] * fps)), int(round(hold[1] * fps))
+        i = np.arange(out.frames)
+        ti = np.where(i < f0, i, np.where(i < f0 + nh, f0, i - nh))
+        keep = ti < truth.frames
+        sub = copy.copy(truth)
+        sub.pw, sub.Rw = truth.pw[ti[keep]], truth.Rw[ti[keep]]
+        truth, n = sub, int(keep.sum())
+        out = copy.copy(out)
+        out.pw = out.pw[:n]
     n = min(out.frames, truth.frames)
     if n < 2:
         return None
@@ -118,12 +134,17 @@ def run_demo(demo, src, out, model, extra, trackers_out=None):
     return r.returncode, r.stdout + r.stderr
 
 
+DEVICES = ["--devices", "--devices-stand", "0"]  # a session that starts with the user standing 2.5 s
+
+
 def mode_inputs(mode, val_dir, every, tmp):
     """(source files, demo options, truth files) of a mode."""
     files = sorted(glob.glob(os.path.join(val_dir, "*.bvh")))[::every]
     if mode == "nominal":
         return files, [], files
-    if mode in ("devices", "csv"):
+    if mode == "devices":
+        return files, DEVICES, files
+    if mode == "csv":  # the user walks from the first frame and stands half-way through the clip
         return files, ["--devices"], files
     if mode == "cmu":
         return [f for f in CMU if os.path.exists(f)], [], [f for f in CMU if os.path.exists(f)]
@@ -132,27 +153,36 @@ def mode_inputs(mode, val_dir, every, tmp):
     if not os.path.isdir(d):
         bodies.main([val_dir, d, "--preset", mode, "--every", str(every)])
     f2 = sorted(glob.glob(os.path.join(d, "*.bvh")))
-    return f2, ["--devices"], f2
+    return f2, DEVICES, f2
 
 
 def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None):
     src, opts, truth = mode_inputs(mode, val_dir, every, tmp)
     tot, fails = {}, []
-    for s, t in zip(src, truth):
+    for ci, (s, t) in enumerate(zip(src, truth)):
         out = os.path.join(tmp, "out.bvh")
+        hold = None
+        opts_c = list(opts)
+        if "--devices" in opts_c:
+            opts_c += ["--device-seed", str(1000 + ci)]  # a different user and devices per clip
+            if "--devices-stand" in opts_c:
+                hold = (float(opts_c[opts_c.index("--devices-stand") + 1]), 2.5)
         if mode == "csv":
+            half = 0.5 * Clip(s).frames / 30.0
+            opts_c += ["--devices-stand", f"{half:.3f}"]
+            hold = (half, 2.5)
             csv = os.path.join(tmp, "session.csv")
-            rc, log = run_demo(demo, s, os.path.join(tmp, "unused.bvh"), model, opts + extra, trackers_out=csv)
+            rc, log = run_demo(demo, s, os.path.join(tmp, "unused.bvh"), model, opts_c + extra, trackers_out=csv)
             if rc != 0:
                 fails.append((s, log.strip().splitlines()[-1:]))
                 continue
             rc, log = run_demo(demo, csv, out, model, extra)
         else:
-            rc, log = run_demo(demo, s, out, model, opts + extra)
+            rc, log = run_demo(demo, s, out, model, opts_c + extra)
         if rc != 0:
             fails.append((s, log.strip().splitlines()[-1:]))
             continue
-        m = compare(out, t)
+        m = compare(out, t, hold=hold)
         if m is None:
             continue
         if per_clip is not None:

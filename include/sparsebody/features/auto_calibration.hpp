@@ -351,7 +351,9 @@ class AutoCalibration {
       for (int k = 0; k < trackers::kTrackerCount; ++k) {
         if (!std::isfinite(best_score[k])) continue;
         const Sample& s = at(best[k]);
-        c.offset[k] = Eigen::Quaterniond(s.q[k].normalized().toRotationMatrix().transpose() * Calibration::facing(s.q[0]));
+        Eigen::Matrix3d target = Calibration::facing(s.q[0]);
+        if (k == 3) target = target * devices_.pelvis_standing.toRotationMatrix();
+        c.offset[k] = Eigen::Quaterniond(s.q[k].normalized().toRotationMatrix().transpose() * target);
       }
       calib_ = c;
     } else {  // the same stand height: averaged in

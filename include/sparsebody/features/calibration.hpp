@@ -48,14 +48,19 @@ struct Calibration {
 
   // o_k = q_k^-1 Yaw(headset forward) for every tracker with valid[k]; the others keep theirs.
   // False (unchanged) when the headset orientation is not usable.
+  // The pelvis tracker's target is the facing frame times pelvis_standing (the standard skeleton's
+  // standing pelvis tilt, DeviceModel): a belt tracker's mounting is unknown, so it is calibrated to
+  // what the network saw at the training clips' calibration frames.
   bool set_orientations(const std::array<Eigen::Quaterniond, trackers::kTrackerCount>& q,
-                        const std::array<bool, trackers::kTrackerCount>& valid) noexcept {
+                        const std::array<bool, trackers::kTrackerCount>& valid,
+                        const Eigen::Quaterniond& pelvis_standing = Eigen::Quaterniond::Identity()) noexcept {
     if (!valid[0] || !q[0].coeffs().allFinite()) return false;
     const Eigen::Matrix3d yaw = facing(q[0]);
     if (!yaw.allFinite()) return false;
     for (int k = 0; k < trackers::kTrackerCount; ++k)
       if (valid[k] && q[k].coeffs().allFinite())
-        offset[k] = Eigen::Quaterniond(q[k].normalized().toRotationMatrix().transpose() * yaw);
+        offset[k] = Eigen::Quaterniond(q[k].normalized().toRotationMatrix().transpose() *
+                                       (k == 3 ? Eigen::Matrix3d(yaw * pelvis_standing.toRotationMatrix()) : yaw));
     return true;
   }
 
@@ -63,6 +68,7 @@ struct Calibration {
   static Eigen::Matrix3d facing(const Eigen::Quaterniond& head) noexcept {
     return yaw_frame(-(head.normalized() * Eigen::Vector3d::UnitZ()), Eigen::Matrix3d::Identity());
   }
+
 
   // From one frame of the user standing upright facing forward (a T-pose or any standing frame;
   // the head must be valid). Offsets o_k from the frame, d_k from `devices`, the floor at y = 0,
@@ -75,7 +81,7 @@ struct Calibration {
     std::array<Eigen::Quaterniond, trackers::kTrackerCount> q;
     for (int k = 0; k < trackers::kTrackerCount; ++k) q[k] = to_eigen(f.pose[k].orientation);
     Calibration c = uncalibrated(devices);
-    if (!c.set_orientations(q, f.valid)) return false;
+    if (!c.set_orientations(q, f.valid, devices.pelvis_standing)) return false;
     const double hp = f.pose[3].position.y, hh = f.pose[0].position.y - devices.eye.y();
     if (from == ScaleFrom::Pelvis && f.valid[3] && hp > 0.3) c.scale = standard_hips_height / hp;
     else if (hh > 0.5) c.scale = standard_head_height / hh;

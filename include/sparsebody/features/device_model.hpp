@@ -37,6 +37,10 @@ struct DeviceModel {
   // The pelvis tracker's vertical offset measured at calibration instead (Calibration::
   // set_pelvis_height): at the standing frame it gives the standard standing hips height.
   bool pelvis_from_standing = true;
+  // The pelvis tracker's calibrated orientation at the standing frame: the facing frame times
+  // this, the standard performer's mean standing pelvis frame (a ~3 deg tilt; weights_tool/
+  // devices.py PELVIS_STANDING, the chordal mean over the training clips' first frames).
+  Eigen::Quaterniond pelvis_standing{0.999652291, -0.0217321878, -0.000325788787, -0.0149299376};  // w x y z
 
   // Trackers placed at the joints in the body convention (mocap synthesis without devices,
   // the training data): no offsets at all.
@@ -44,6 +48,7 @@ struct DeviceModel {
     DeviceModel m;
     m.eye = m.grip_left = m.grip_right = m.pelvis = Eigen::Vector3d::Zero();
     m.pelvis_from_standing = false;
+    m.pelvis_standing = Eigen::Quaterniond::Identity();
     return m;
   }
 
