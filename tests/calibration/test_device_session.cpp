@@ -144,7 +144,7 @@ void check_pipeline(const W& weights, C cfg, const char* name, double max_standi
   CHECK(p.calibration_report().status == features::CalibrationStatus::Default);
   const HeadError e = run(p, s.devices.frames, features::DeviceModel{});
   const auto& r = p.calibration_report();
-  MESSAGE(std::string(name) + ": " + r.message);
+  MESSAGE((std::string(name) + ": " + r.message));
   REQUIRE(r.status == features::CalibrationStatus::Calibrated);
   CHECK(r.first_time >= 7.5);  // the stand (the clip's own moments before it are not still)
   CHECK(r.last_time <= 10.8 + 1e-9);
