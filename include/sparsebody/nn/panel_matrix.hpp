@@ -21,6 +21,10 @@
 #include "sparsebody/nn/half.hpp"
 #include "sparsebody/nn/simd.hpp"
 
+#if defined(__aarch64__) && defined(__ARM_NEON)
+#include <arm_neon.h>
+#endif
+
 namespace sparsebody::nn {
 
 inline constexpr int kPanelBatches = 8;
@@ -56,6 +60,10 @@ inline Batch<T> load_weights(const W* p) noexcept {
 #endif
 #if defined(__F16C__)
     if constexpr (kLanes<float> == 4) return Batch<float>(_mm_cvtph_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p))));
+#endif
+#if defined(__aarch64__) && defined(__ARM_NEON)
+    // fcvtl: exact widening (every binary16 value is a float), so it equals to_float_portable.
+    if constexpr (kLanes<float> == 4) return Batch<float>(vcvt_f32_f16(vreinterpret_f16_u16(vld1_u16(reinterpret_cast<const std::uint16_t*>(p)))));
 #endif
     alignas(kBufferAlign) float tmp[kLanes<float>];  // portable path (no F16C): correct, slower
     for (int i = 0; i < kLanes<float>; ++i) tmp[i] = to_float(p[i]);
