@@ -5,8 +5,14 @@
 //  - "paired/": each network step interleaved with a plain read of its own weight buffers (the
 //    robust step/read ratio on a noisy machine).
 // Run: build/bench/bench_networks --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+// The storage table (float / f16 / q8 for every paper network, speed-ups printed at the end), e.g.
+// for a -DSPARSEBODY_MARCH=x86-64-v3 build beside the native one:
+//   build/bench/bench_networks --benchmark_filter='^sparsebody/' --benchmark_repetitions=5 \
+//       --benchmark_report_aggregates_only=true
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <fstream>
 #include <cstdint>
 #include <cstring>
 #include <random>
@@ -23,6 +29,7 @@
 #include "sparsebody/networks/n3p_predictor_net.hpp"
 #include "sparsebody/networks/policy_nets.hpp"
 #include "sparsebody/nn/network.hpp"
+#include "sparsebody/nn/storage.hpp"
 #ifdef SPARSEBODY_BENCH_TORCH
 #include "torch_peer.hpp"
 #endif
@@ -50,6 +57,9 @@ using N3PPolicy = networks::N3PPolicyNet<float, 868, 72>;
 using QuestSim = networks::QuestSimPolicyNet<float, 475, 33>;
 using N3PPolicyF16 = networks::N3PPolicyNet<float, 868, 72, 256, nn::f16>;
 using QuestSimF16 = networks::QuestSimPolicyNet<float, 475, 33, nn::f16>;
+using GsigF16 = networks::N3PPredictorNet<float, 45, 64, 12, 3, nn::f16>;
+using GloF16 = networks::N3PPredictorNet<float, 12, 128, 113, 3, nn::f16>;
+using GupF16 = networks::N3PPredictorNet<float, 45, 128, 201, 3, nn::f16>;
 template <int H>
 using LoBSTrF16Small = networks::LoBSTrNet<float, H, kLatent, 37, nn::f16>;
 // int8 weight storage (nn/int8.hpp): a quarter of the float bytes, dynamic input quantization.
@@ -253,6 +263,9 @@ void register_all() {
   SB_NET("N3P_policy_868_256_256_72", N3PPolicy, mlp_table({868, 256, 256, 72}), "n3p_policy")
   SB_NET("QuestSim_475_400_300_200_33", QuestSim, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
   SB_NET("LoBSTr_H256_f16weights", LoBSTrF16Small<256>, lobstr_table(256, kLatent), "lobstr")
+  SB_NET("N3P_Gsig_H64_f16weights", GsigF16, n3p_table(45, 64, 12), "n3p_signal")
+  SB_NET("N3P_Glo_H128_f16weights", GloF16, n3p_table(12, 128, 113), "n3p_lower")
+  SB_NET("N3P_Gup_H128_f16weights", GupF16, n3p_table(45, 128, 201), "n3p_upper")
   SB_NET("N3P_policy_868_256_256_72_f16weights", N3PPolicyF16, mlp_table({868, 256, 256, 72}), "n3p_policy")
   SB_NET("QuestSim_475_400_300_200_33_f16weights", QuestSimF16, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
   SB_NET("GRU_37x1024_q8weights", GruOnlyQ8<1024>, lobstr_table(1024, 0, true), "gru")
@@ -265,6 +278,14 @@ void register_all() {
   SB_NET("N3P_policy_868_256_256_72_q8weights", N3PPolicyQ8, mlp_table({868, 256, 256, 72}), "n3p_policy")
   SB_NET("QuestSim_475_400_300_200_33_q8weights", QuestSimQ8, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
 #undef SB_NET
+  // Storage speed-ups, same run: float time / f16 time and float time / q8 time (> 1: faster).
+  for (const char* n : {"GRU_37x1024", "GRU_37x256", "LoBSTr_H1024", "LoBSTr_H256", "N3P_Gsig_H64", "N3P_Glo_H128",
+                        "N3P_Gup_H128", "N3P_policy_868_256_256_72", "QuestSim_475_400_300_200_33"}) {
+    add_ratio(std::string("speed-up f16 ") + n + " (float / f16)", std::string("sparsebody/") + n,
+              std::string("sparsebody/") + n + "_f16weights");
+    add_ratio(std::string("speed-up q8  ") + n + " (float / q8)", std::string("sparsebody/") + n,
+              std::string("sparsebody/") + n + "_q8weights");
+  }
   add_ratio("GRU_37x1024 f16 weights / plain read of its float weights", "sparsebody/GRU_37x1024_f16weights",
             "read/" + std::to_string(entries[0].weight_bytes) + "B/" + std::to_string(entries[0].weight_bytes));
   add_ratio("LoBSTr_H1024 f16 weights / plain read of its float weights", "sparsebody/LoBSTr_H1024_f16weights",
@@ -304,7 +325,22 @@ void register_all() {
 
 }  // namespace
 
+// The CPU and what this build compiled for, printed beside the figures.
+void print_target() {
+  std::ifstream f("/proc/cpuinfo");
+  std::string line, model = "unknown CPU", family;
+  while (std::getline(f, line)) {
+    if (line.rfind("model name", 0) == 0 && model == "unknown CPU") model = line.substr(line.find(':') + 2);
+    if (line.rfind("cpu family", 0) == 0 && family.empty()) family = line.substr(line.find(':') + 2);
+  }
+  const nn::StorageChoice c = nn::fastest_storage();
+  std::printf("CPU: %s (family %s); build: %d float lanes, int8 kernel %s, f16 widening %s; storage auto -> %s\n",
+              model.c_str(), family.c_str(), nn::kLanes<float>, nn::q8_kernel_name(nn::kQ8Kernel),
+              nn::kF16Hardware ? "in hardware" : "portable", nn::storage_name(c.storage));
+}
+
 int main(int argc, char** argv) {
+  print_target();
   register_all();
   return sparsebody_bench::run_with_ratios(argc, argv, "sparsebody networks");
 }

@@ -3,24 +3,18 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "sparsebody/nn/int8.hpp"
+#include "sparsebody/nn/storage.hpp"
 
 namespace demo {
 
-const char* Options::default_storage() noexcept {
-#if SPARSEBODY_Q8_AVX512
-  return "q8";
-#else
-  return "float";
-#endif
-}
+const char* Options::default_storage() noexcept { return "auto"; }
 
 void usage(const char* msg) {
   std::fprintf(stderr,
                "%s\nusage: sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p] [--no-pelvis]\n"
                "                       [--weights FILE (LoBSTr) | DIR (Neural3Points: n3p_{signal,lower,upper}.json)]\n"
                "                       [--mode streaming|window] [--no-contact-ik] [--trackers-out trackers.csv]\n"
-               "                       [--calibration-frame N] [--storage float|f16|q8] [--physics] [--quiet]\n"
+               "                       [--calibration-frame N] [--storage auto|float|f16|q8] [--physics] [--quiet]\n"
                "exit codes: 0 done; 1 the run failed (no usable calibration, a model the input cannot drive);\n"
                "            2 bad command line, or an input or weights file that is missing or malformed\n",
                msg);
@@ -44,7 +38,8 @@ Options parse_options(int argc, char** argv) {
     else if (a == "--physics") o.physics = true;
     else if (a == "--storage") {
       o.storage = next();
-      if (o.storage != "float" && o.storage != "f16" && o.storage != "q8") usage("--storage must be float, f16 or q8");
+      if (o.storage != "auto" && o.storage != "float" && o.storage != "f16" && o.storage != "q8")
+        usage("--storage must be auto, float, f16 or q8");
     }
     else if (a == "--mode") {
       const std::string m = next();
@@ -60,6 +55,11 @@ Options parse_options(int argc, char** argv) {
     else o.input = a;
   }
   if (o.input.empty()) usage("no input file");
+  if (o.storage == "auto") {  // the build's fastest storage (nn/storage.hpp)
+    const sparsebody::nn::StorageChoice c = sparsebody::nn::fastest_storage();
+    o.storage = sparsebody::nn::storage_name(c.storage);
+    std::printf("storage auto -> %s (%s)\n", o.storage.c_str(), c.reason);
+  }
   return o;
 }
 

@@ -16,7 +16,7 @@ struct Options {
   std::string storage = default_storage();
   int calibration_frame = 0;
 
-  // q8 where this build has the AVX-512 VNNI kernel (the portable int8 path is exact but slow).
+  // "auto": resolved by parse_options() with nn::fastest_storage() (q8 where the build has a SIMD int8 kernel).
   static const char* default_storage() noexcept;
 };
 

@@ -274,6 +274,7 @@ inline void q8_panel(const std::int8_t* __restrict w, int groups, const std::int
   static_assert(q8_kernel_available(Kern), "q8 kernel not compiled into this build");
   [[maybe_unused]] constexpr int NV = R / q8_kernel_rows(Kern);  // vectors per column group
   [[maybe_unused]] constexpr int K = 8 / NV > 1 ? 8 / NV : 1;   // accumulator sets
+  (void)sum;  // only the VNNI kernels (unsigned inputs) need the row sums
 #if SPARSEBODY_Q8_AVX512
   if constexpr (Kern == Q8Kernel::avx512_vnni) {
     __m512i acc[K][NV];
