@@ -14,6 +14,7 @@
 
 #include "sparsebody/core/aligned_buffer.hpp"
 #include "sparsebody/nn/int8.hpp"
+#include "sparsebody/nn/storage.hpp"
 
 using namespace sparsebody;
 using nn::Q8Kernel;
@@ -159,4 +160,18 @@ TEST_CASE("pack_q8 stores only -127..127 (the AVX2 kernel's sign trick needs no 
     lo = std::min<int>(lo, p.q[i]), hi = std::max<int>(hi, p.q[i]);
   CHECK(lo == -127);
   CHECK(hi == 127);
+}
+
+TEST_CASE("storage auto: q8 exactly where the build has a SIMD int8 kernel, else f16 only beyond L2") {
+  constexpr nn::StorageChoice c = nn::fastest_storage();  // decided at compile time
+  MESSAGE("storage auto -> " << std::string(nn::storage_name(c.storage)) << " (" << std::string(c.reason) << ")");
+  CHECK((c.storage == nn::Storage::q8) == (nn::kQ8Kernel != Q8Kernel::portable));
+  if (nn::kQ8Kernel == Q8Kernel::portable) {
+    CHECK(c.storage == nn::Storage::f32);
+    CHECK(nn::fastest_storage(nn::kF16MinFloatBytes).storage == nn::Storage::f32);
+    CHECK(nn::fastest_storage(nn::kF16MinFloatBytes + 1).storage == (nn::kF16Hardware ? nn::Storage::f16 : nn::Storage::f32));
+  }
+#if defined(__aarch64__)
+  CHECK(c.storage == nn::Storage::q8);  // every ARM64 build has NEON
+#endif
 }
