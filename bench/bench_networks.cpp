@@ -28,6 +28,7 @@
 #include "sparsebody/networks/lobstr_net.hpp"
 #include "sparsebody/networks/n3p_predictor_net.hpp"
 #include "sparsebody/networks/policy_nets.hpp"
+#include "sparsebody/nn/batch.hpp"
 #include "sparsebody/nn/network.hpp"
 #include "sparsebody/nn/storage.hpp"
 #ifdef SPARSEBODY_BENCH_TORCH
@@ -203,6 +204,48 @@ void bench_paired(benchmark::State& st, io::TensorTable table, const char* kind)
   st.counters["weight_bytes"] = double(w->bytes());
 }
 
+// N instances sharing one weight set: one NetworkBatch step (each weight streamed once for all N)
+// against N separate Network steps, same inputs. Counter us/instance: time per instance.
+template <class Net>
+std::vector<std::vector<float>> batch_inputs(int n) {
+  std::mt19937 rng(5);
+  std::normal_distribution<float> d(0, 1);
+  std::vector<std::vector<float>> x(n, std::vector<float>(Net::in_size));
+  for (auto& v : x)
+    for (auto& e : v) e = d(rng);
+  return x;
+}
+template <class Net>
+void bench_batch(benchmark::State& st, io::TensorTable table, const char* kind) {
+  const int n = static_cast<int>(st.range(0));
+  auto w = make_weights<Net>(std::move(table), kind);
+  nn::NetworkBatch<Net> batch(w, n);
+  const auto x = batch_inputs<Net>(n);
+  std::vector<const float*> xp;
+  for (const auto& v : x) xp.push_back(v.data());
+  for (auto _ : st) {
+    batch.step(xp.data());
+    benchmark::DoNotOptimize(batch.output(n - 1));
+    benchmark::ClobberMemory();
+  }
+  st.counters["us/instance"] = benchmark::Counter(double(n) * 1e-6, benchmark::Counter::kIsIterationInvariantRate |
+                                                                       benchmark::Counter::kInvert);
+}
+template <class Net>
+void bench_singles(benchmark::State& st, io::TensorTable table, const char* kind) {
+  const int n = static_cast<int>(st.range(0));
+  auto w = make_weights<Net>(std::move(table), kind);
+  std::vector<nn::Network<Net>> nets;
+  for (int i = 0; i < n; ++i) nets.emplace_back(w);
+  const auto x = batch_inputs<Net>(n);
+  for (auto _ : st) {
+    for (int i = 0; i < n; ++i) benchmark::DoNotOptimize(nets[i].step(x[i].data()));
+    benchmark::ClobberMemory();
+  }
+  st.counters["us/instance"] = benchmark::Counter(double(n) * 1e-6, benchmark::Counter::kIsIterationInvariantRate |
+                                                                       benchmark::Counter::kInvert);
+}
+
 // Loading the paper-size LoBSTr model (37->1024 GRU, 13 MB of float32) from weights JSON text.
 void BM_LoadLoBSTr1024(benchmark::State& st) {
   const bool base64 = st.range(0) == 1;
@@ -278,6 +321,21 @@ void register_all() {
   SB_NET("N3P_policy_868_256_256_72_q8weights", N3PPolicyQ8, mlp_table({868, 256, 256, 72}), "n3p_policy")
   SB_NET("QuestSim_475_400_300_200_33_q8weights", QuestSimQ8, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
 #undef SB_NET
+  // Batched steps (nn/batch.hpp) at N = 1, 4, 16, 64 against N single steps, same run.
+#define SB_BATCH(NAME, NET, TABLE, KIND)                                                                           \
+  for (int n : {1, 4, 16, 64}) {                                                                                  \
+    benchmark::RegisterBenchmark("batch/" NAME, [](benchmark::State& s) { bench_batch<NET>(s, TABLE, KIND); })     \
+        ->Arg(n)->Unit(benchmark::kMicrosecond);                                                                  \
+    benchmark::RegisterBenchmark("singles/" NAME, [](benchmark::State& s) { bench_singles<NET>(s, TABLE, KIND); }) \
+        ->Arg(n)->Unit(benchmark::kMicrosecond);                                                                  \
+    add_ratio(std::string("batch / singles ") + NAME + " N=" + std::to_string(n),                                 \
+              std::string("batch/") + NAME + "/" + std::to_string(n), std::string("singles/") + NAME + "/" + std::to_string(n)); \
+  }
+  SB_BATCH("GRU_37x1024", GruOnly<1024>, lobstr_table(1024, 0, true), "gru")
+  SB_BATCH("GRU_37x256", GruOnly<256>, lobstr_table(256, 0, true), "gru")
+  SB_BATCH("QuestSim_475_400_300_200_33", QuestSim, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
+  SB_BATCH("QuestSim_475_400_300_200_33_f16weights", QuestSimF16, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
+#undef SB_BATCH
   // Storage speed-ups, same run: float time / f16 time and float time / q8 time (> 1: faster).
   for (const char* n : {"GRU_37x1024", "GRU_37x256", "LoBSTr_H1024", "LoBSTr_H256", "N3P_Gsig_H64", "N3P_Glo_H128",
                         "N3P_Gup_H128", "N3P_policy_868_256_256_72", "QuestSim_475_400_300_200_33"}) {

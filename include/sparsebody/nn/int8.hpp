@@ -451,4 +451,11 @@ inline void gemv(const PanelMatrix<float, q8>& W, const float* x, const float* b
   gemv_q8<kQ8Kernel>(W, x, bias, y);
 }
 
+// Batched int8 product: one product per instance for now (each quantizes its own input); it does
+// not yet share weight loads across instances as the float/f16 gemv_batch does.
+inline void gemv_batch(const PanelMatrix<float, q8>& W, int n, const float* const* x, const float* bias,
+                       float* const* y) noexcept {
+  for (int i = 0; i < n; ++i) gemv_q8<kQ8Kernel>(W, x[i], bias, y[i]);
+}
+
 }  // namespace sparsebody::nn
