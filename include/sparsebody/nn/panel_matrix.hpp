@@ -193,11 +193,12 @@ inline void panel_gemv_batch(const W* w, int cols, int n, const T* const* x, con
                              int row0) noexcept {
   constexpr int K = kFmaChains<T> / NB > 1 ? kFmaChains<T> / NB : 1;
   constexpr int NI = 8 / K > 1 ? 8 / K : 1;  // K * NI <= 8 accumulators (+ weights, broadcasts)
-  for (int b = 0; b < NB; ++b) {
-    int i = 0;
-    for (; i + NI <= n; i += NI) panel_gemv_tile<T, W, NB, NI>(w, cols, b, x + i, bias, y + i, row0);
-    for (; i < n; ++i) panel_gemv_tile<T, W, NB, 1>(w, cols, b, x + i, bias, y + i, row0);
-  }
+  const int tiled = NI > 1 ? n / NI * NI : 0;
+  for (int b = 0; b < NB; ++b)
+    for (int i = 0; i < tiled; i += NI) panel_gemv_tile<T, W, NB, NI>(w, cols, b, x + i, bias, y + i, row0);
+  // The instances left over (all of them when a tile would hold one): the single product, which
+  // keeps all NB * K accumulators busy instead of K.
+  for (int i = tiled; i < n; ++i) panel_gemv<T, W, NB>(w, cols, x[i], bias, y[i] + row0);
 }
 }  // namespace detail
 
