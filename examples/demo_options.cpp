@@ -14,7 +14,7 @@ void usage(const char* msg) {
                "%s\nusage: sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p] [--no-pelvis]\n"
                "                       [--weights FILE (LoBSTr) | DIR (Neural3Points: n3p_{signal,lower,upper}.json)]\n"
                "                       [--mode streaming|window] [--no-contact-ik] [--trackers-out trackers.csv]\n"
-               "                       [--calibration-frame N] [--storage auto|float|f16|q8] [--physics] [--quiet]\n"
+               "                       [--calibration-frame N] [--storage float|f16|q8] [--physics] [--quiet]\n"
                "exit codes: 0 done; 1 the run failed (no usable calibration, a model the input cannot drive);\n"
                "            2 bad command line, or an input or weights file that is missing or malformed\n",
                msg);
