@@ -5,8 +5,14 @@
 //  - "paired/": each network step interleaved with a plain read of its own weight buffers (the
 //    robust step/read ratio on a noisy machine).
 // Run: build/bench/bench_networks --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+// The storage table (float / f16 / q8 for every paper network, speed-ups printed at the end), e.g.
+// for a -DSPARSEBODY_MARCH=x86-64-v3 build beside the native one:
+//   build/bench/bench_networks --benchmark_filter='^sparsebody/' --benchmark_repetitions=5 \
+//       --benchmark_report_aggregates_only=true
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <fstream>
 #include <cstdint>
 #include <cstring>
 #include <random>
@@ -22,7 +28,9 @@
 #include "sparsebody/networks/lobstr_net.hpp"
 #include "sparsebody/networks/n3p_predictor_net.hpp"
 #include "sparsebody/networks/policy_nets.hpp"
+#include "sparsebody/nn/batch.hpp"
 #include "sparsebody/nn/network.hpp"
+#include "sparsebody/nn/storage.hpp"
 #ifdef SPARSEBODY_BENCH_TORCH
 #include "torch_peer.hpp"
 #endif
@@ -50,6 +58,9 @@ using N3PPolicy = networks::N3PPolicyNet<float, 868, 72>;
 using QuestSim = networks::QuestSimPolicyNet<float, 475, 33>;
 using N3PPolicyF16 = networks::N3PPolicyNet<float, 868, 72, 256, nn::f16>;
 using QuestSimF16 = networks::QuestSimPolicyNet<float, 475, 33, nn::f16>;
+using GsigF16 = networks::N3PPredictorNet<float, 45, 64, 12, 3, nn::f16>;
+using GloF16 = networks::N3PPredictorNet<float, 12, 128, 113, 3, nn::f16>;
+using GupF16 = networks::N3PPredictorNet<float, 45, 128, 201, 3, nn::f16>;
 template <int H>
 using LoBSTrF16Small = networks::LoBSTrNet<float, H, kLatent, 37, nn::f16>;
 // int8 weight storage (nn/int8.hpp): a quarter of the float bytes, dynamic input quantization.
@@ -193,6 +204,48 @@ void bench_paired(benchmark::State& st, io::TensorTable table, const char* kind)
   st.counters["weight_bytes"] = double(w->bytes());
 }
 
+// N instances sharing one weight set: one NetworkBatch step (each weight streamed once for all N)
+// against N separate Network steps, same inputs. Counter us/instance: time per instance.
+template <class Net>
+std::vector<std::vector<float>> batch_inputs(int n) {
+  std::mt19937 rng(5);
+  std::normal_distribution<float> d(0, 1);
+  std::vector<std::vector<float>> x(n, std::vector<float>(Net::in_size));
+  for (auto& v : x)
+    for (auto& e : v) e = d(rng);
+  return x;
+}
+template <class Net>
+void bench_batch(benchmark::State& st, io::TensorTable table, const char* kind) {
+  const int n = static_cast<int>(st.range(0));
+  auto w = make_weights<Net>(std::move(table), kind);
+  nn::NetworkBatch<Net> batch(w, n);
+  const auto x = batch_inputs<Net>(n);
+  std::vector<const float*> xp;
+  for (const auto& v : x) xp.push_back(v.data());
+  for (auto _ : st) {
+    batch.step(xp.data());
+    benchmark::DoNotOptimize(batch.output(n - 1));
+    benchmark::ClobberMemory();
+  }
+  st.counters["us/instance"] = benchmark::Counter(double(n) * 1e-6, benchmark::Counter::kIsIterationInvariantRate |
+                                                                       benchmark::Counter::kInvert);
+}
+template <class Net>
+void bench_singles(benchmark::State& st, io::TensorTable table, const char* kind) {
+  const int n = static_cast<int>(st.range(0));
+  auto w = make_weights<Net>(std::move(table), kind);
+  std::vector<nn::Network<Net>> nets;
+  for (int i = 0; i < n; ++i) nets.emplace_back(w);
+  const auto x = batch_inputs<Net>(n);
+  for (auto _ : st) {
+    for (int i = 0; i < n; ++i) benchmark::DoNotOptimize(nets[i].step(x[i].data()));
+    benchmark::ClobberMemory();
+  }
+  st.counters["us/instance"] = benchmark::Counter(double(n) * 1e-6, benchmark::Counter::kIsIterationInvariantRate |
+                                                                       benchmark::Counter::kInvert);
+}
+
 // Loading the paper-size LoBSTr model (37->1024 GRU, 13 MB of float32) from weights JSON text.
 void BM_LoadLoBSTr1024(benchmark::State& st) {
   const bool base64 = st.range(0) == 1;
@@ -253,6 +306,9 @@ void register_all() {
   SB_NET("N3P_policy_868_256_256_72", N3PPolicy, mlp_table({868, 256, 256, 72}), "n3p_policy")
   SB_NET("QuestSim_475_400_300_200_33", QuestSim, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
   SB_NET("LoBSTr_H256_f16weights", LoBSTrF16Small<256>, lobstr_table(256, kLatent), "lobstr")
+  SB_NET("N3P_Gsig_H64_f16weights", GsigF16, n3p_table(45, 64, 12), "n3p_signal")
+  SB_NET("N3P_Glo_H128_f16weights", GloF16, n3p_table(12, 128, 113), "n3p_lower")
+  SB_NET("N3P_Gup_H128_f16weights", GupF16, n3p_table(45, 128, 201), "n3p_upper")
   SB_NET("N3P_policy_868_256_256_72_f16weights", N3PPolicyF16, mlp_table({868, 256, 256, 72}), "n3p_policy")
   SB_NET("QuestSim_475_400_300_200_33_f16weights", QuestSimF16, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
   SB_NET("GRU_37x1024_q8weights", GruOnlyQ8<1024>, lobstr_table(1024, 0, true), "gru")
@@ -265,6 +321,29 @@ void register_all() {
   SB_NET("N3P_policy_868_256_256_72_q8weights", N3PPolicyQ8, mlp_table({868, 256, 256, 72}), "n3p_policy")
   SB_NET("QuestSim_475_400_300_200_33_q8weights", QuestSimQ8, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
 #undef SB_NET
+  // Batched steps (nn/batch.hpp) at N = 1, 4, 16, 64 against N single steps, same run.
+#define SB_BATCH(NAME, NET, TABLE, KIND)                                                                           \
+  for (int n : {1, 4, 16, 64}) {                                                                                  \
+    benchmark::RegisterBenchmark("batch/" NAME, [](benchmark::State& s) { bench_batch<NET>(s, TABLE, KIND); })     \
+        ->Arg(n)->Unit(benchmark::kMicrosecond);                                                                  \
+    benchmark::RegisterBenchmark("singles/" NAME, [](benchmark::State& s) { bench_singles<NET>(s, TABLE, KIND); }) \
+        ->Arg(n)->Unit(benchmark::kMicrosecond);                                                                  \
+    add_ratio(std::string("batch / singles ") + NAME + " N=" + std::to_string(n),                                 \
+              std::string("batch/") + NAME + "/" + std::to_string(n), std::string("singles/") + NAME + "/" + std::to_string(n)); \
+  }
+  SB_BATCH("GRU_37x1024", GruOnly<1024>, lobstr_table(1024, 0, true), "gru")
+  SB_BATCH("GRU_37x256", GruOnly<256>, lobstr_table(256, 0, true), "gru")
+  SB_BATCH("QuestSim_475_400_300_200_33", QuestSim, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
+  SB_BATCH("QuestSim_475_400_300_200_33_f16weights", QuestSimF16, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
+#undef SB_BATCH
+  // Storage speed-ups, same run: float time / f16 time and float time / q8 time (> 1: faster).
+  for (const char* n : {"GRU_37x1024", "GRU_37x256", "LoBSTr_H1024", "LoBSTr_H256", "N3P_Gsig_H64", "N3P_Glo_H128",
+                        "N3P_Gup_H128", "N3P_policy_868_256_256_72", "QuestSim_475_400_300_200_33"}) {
+    add_ratio(std::string("speed-up f16 ") + n + " (float / f16)", std::string("sparsebody/") + n,
+              std::string("sparsebody/") + n + "_f16weights");
+    add_ratio(std::string("speed-up q8  ") + n + " (float / q8)", std::string("sparsebody/") + n,
+              std::string("sparsebody/") + n + "_q8weights");
+  }
   add_ratio("GRU_37x1024 f16 weights / plain read of its float weights", "sparsebody/GRU_37x1024_f16weights",
             "read/" + std::to_string(entries[0].weight_bytes) + "B/" + std::to_string(entries[0].weight_bytes));
   add_ratio("LoBSTr_H1024 f16 weights / plain read of its float weights", "sparsebody/LoBSTr_H1024_f16weights",
@@ -304,7 +383,22 @@ void register_all() {
 
 }  // namespace
 
+// The CPU and what this build compiled for, printed beside the figures.
+void print_target() {
+  std::ifstream f("/proc/cpuinfo");
+  std::string line, model = "unknown CPU", family;
+  while (std::getline(f, line)) {
+    if (line.rfind("model name", 0) == 0 && model == "unknown CPU") model = line.substr(line.find(':') + 2);
+    if (line.rfind("cpu family", 0) == 0 && family.empty()) family = line.substr(line.find(':') + 2);
+  }
+  const nn::StorageChoice c = nn::fastest_storage();
+  std::printf("CPU: %s (family %s); build: %d float lanes, int8 kernel %s, f16 widening %s; storage auto -> %s\n",
+              model.c_str(), family.c_str(), nn::kLanes<float>, nn::q8_kernel_name(nn::kQ8Kernel),
+              nn::kF16Hardware ? "in hardware" : "portable", nn::storage_name(c.storage));
+}
+
 int main(int argc, char** argv) {
+  print_target();
   register_all();
   return sparsebody_bench::run_with_ratios(argc, argv, "sparsebody networks");
 }

@@ -1,6 +1,8 @@
 // A Google Benchmark main that, after the normal report, prints ratios between benchmarks measured
 // in the same run (e.g. sparsebody vs LibTorch, a network vs a plain read of its weight bytes).
-// Uses the median aggregate when --benchmark_repetitions > 1, else the single run's real time.
+// Uses the median aggregate when --benchmark_repetitions > 1, else the single run; CPU time, not
+// real time: on a shared machine a descheduled thread inflates real time, not CPU time (both
+// benchmarks of a ratio are single-threaded, so CPU time is the time they ran).
 #pragma once
 #include <cstdio>
 #include <map>
@@ -25,13 +27,13 @@ inline void add_ratio(std::string label, std::string num, std::string den) {
 
 class CollectingReporter : public benchmark::ConsoleReporter {
  public:
-  std::map<std::string, double> times_ns;  // name -> real time per iteration (ns)
+  std::map<std::string, double> times_ns;  // name -> CPU time per iteration (ns)
   void ReportRuns(const std::vector<Run>& runs) override {
     for (const Run& r : runs) {
       if (r.error_occurred) continue;
       const bool aggregate = r.run_type == Run::RT_Aggregate;
       if (aggregate && r.aggregate_name != "median") continue;
-      const double ns = r.GetAdjustedRealTime() * to_ns(r.time_unit);
+      const double ns = r.GetAdjustedCPUTime() * to_ns(r.time_unit);
       const std::string name = r.run_name.str();
       if (aggregate || !times_ns.count(name) || !medians_seen_.count(name)) times_ns[name] = ns;
       if (aggregate) medians_seen_[name] = true;

@@ -3,17 +3,11 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "sparsebody/nn/int8.hpp"
+#include "sparsebody/nn/storage.hpp"
 
 namespace demo {
 
-const char* Options::default_storage() noexcept {
-#if SPARSEBODY_Q8_AVX512
-  return "q8";
-#else
-  return "float";
-#endif
-}
+const char* Options::default_storage() noexcept { return "auto"; }
 
 void usage(const char* msg) {
   std::fprintf(stderr,
@@ -49,7 +43,8 @@ Options parse_options(int argc, char** argv) {
     else if (a == "--physics") o.physics = true;
     else if (a == "--storage") {
       o.storage = next();
-      if (o.storage != "float" && o.storage != "f16" && o.storage != "q8") usage("--storage must be float, f16 or q8");
+      if (o.storage != "auto" && o.storage != "float" && o.storage != "f16" && o.storage != "q8")
+        usage("--storage must be auto, float, f16 or q8");
     }
     else if (a == "--mode") {
       const std::string m = next();
@@ -86,6 +81,11 @@ Options parse_options(int argc, char** argv) {
     else o.input = a;
   }
   if (o.input.empty()) usage("no input file");
+  if (o.storage == "auto") {  // the build's fastest storage (nn/storage.hpp)
+    const sparsebody::nn::StorageChoice c = sparsebody::nn::fastest_storage();
+    o.storage = sparsebody::nn::storage_name(c.storage);
+    std::printf("storage auto -> %s (%s)\n", o.storage.c_str(), c.reason);
+  }
   return o;
 }
 

@@ -24,7 +24,7 @@ struct Options {
   unsigned device_seed = 0;
   double devices_stand = -1;  // --devices-stand T: the clip's frame at T s held 2.5 s (a standing window)
 
-  // q8 where this build has the AVX-512 VNNI kernel (the portable int8 path is exact but slow).
+  // "auto": resolved by parse_options() with nn::fastest_storage() (q8 where the build has a SIMD int8 kernel).
   static const char* default_storage() noexcept;
 };
 

@@ -28,6 +28,9 @@ struct Named {
     L::bind(p, b, prefix + Name + ".");
   }
   static void forward(const Params& p, State& s, const scalar* x, scalar* y) noexcept { L::forward(p, s, x, y); }
+  static void forward_batch(const Params& p, State* const* s, int n, const scalar* const* x, scalar* const* y) noexcept {
+    L::forward_batch(p, s, n, x, y);
+  }
   static void reset(State& s) noexcept { L::reset(s); }
 };
 
@@ -95,6 +98,10 @@ struct Sequential {
   static void forward(const Params& p, State& s, const scalar* x, scalar* y) noexcept {
     forward_from<0>(p, s, x, y);
   }
+  // n instances at once (nn/batch.hpp; every layer needs forward_batch): equal to n forward() calls.
+  static void forward_batch(const Params& p, State* const* s, int n, const scalar* const* x, scalar* const* y) noexcept {
+    batch_from<0>(p, s, n, x, y);
+  }
   static void reset(State& s) noexcept { reset_each(s, std::make_index_sequence<N>{}); }
 
  private:
@@ -110,6 +117,19 @@ struct Sequential {
       scalar* out = std::get<I>(s.buffers).data();
       layer<I>::forward(std::get<I>(p.layers), std::get<I>(s.layers), x, out);
       forward_from<I + 1>(p, s, out, y);
+    }
+  }
+  template <std::size_t I>
+  static void batch_from(const Params& p, State* const* s, int n, const scalar* const* x, scalar* const* y) noexcept {
+    typename layer<I>::State* ls[kBatchMax];
+    for (int i = 0; i < n; ++i) ls[i] = &std::get<I>(s[i]->layers);
+    if constexpr (I + 1 == N) {
+      layer<I>::forward_batch(std::get<I>(p.layers), ls, n, x, y);
+    } else {
+      scalar* out[kBatchMax];
+      for (int i = 0; i < n; ++i) out[i] = std::get<I>(s[i]->buffers).data();
+      layer<I>::forward_batch(std::get<I>(p.layers), ls, n, x, out);
+      batch_from<I + 1>(p, s, n, out, y);
     }
   }
   template <std::size_t... I>

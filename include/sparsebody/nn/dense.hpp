@@ -29,6 +29,11 @@ struct Dense {
     gemv(p.weight, x, p.bias, y);  // y = W x + b
     Act::template apply<T, Out>(y);
   }
+  // n instances at once (nn/batch.hpp): equal to n forward() calls, bit for bit.
+  static void forward_batch(const Params& p, State* const*, int n, const T* const* x, T* const* y) noexcept {
+    gemv_batch(p.weight, n, x, p.bias, y);
+    for (int i = 0; i < n; ++i) Act::template apply<T, Out>(y[i]);
+  }
   static void reset(State&) noexcept {}
 };
 
@@ -46,6 +51,9 @@ struct Activation {
     if (x != y)
       for (int i = 0; i < N; ++i) y[i] = x[i];
     Act::template apply<T, N>(y);
+  }
+  static void forward_batch(const Params& p, State* const* s, int n, const T* const* x, T* const* y) noexcept {
+    for (int i = 0; i < n; ++i) forward(p, *s[i], x[i], y[i]);
   }
   static void reset(State&) noexcept {}
 };

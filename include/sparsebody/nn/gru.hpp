@@ -67,26 +67,53 @@ struct GRU {
   }
 
   static void forward(const Params& p, State& s, const T* x, T* y) noexcept {
-    using B = Batch<T>;
     const T* in = x;
     for (int k = 0; k < Layers; ++k) {
       const LayerParams& lp = p.layer[k];
-      T* h = s.h[k];
-      gemv(lp.w_ih, in, lp.b_ih, s.gi);  // W_i{r,z,n} x + b_i{r,z,n}
-      gemv(lp.w_hh, h, lp.b_hh, s.gh);   // W_h{r,z,n} h + b_h{r,z,n}
-      for (int i = 0; i < Hp; i += kLanes<T>) {
-        const B r = sigmoid<T>(B::load_aligned(s.gi + i) + B::load_aligned(s.gh + i));
-        const B z = sigmoid<T>(B::load_aligned(s.gi + Hp + i) + B::load_aligned(s.gh + Hp + i));
-        const B n = xsimd::tanh(xsimd::fma(r, B::load_aligned(s.gh + 2 * Hp + i), B::load_aligned(s.gi + 2 * Hp + i)));
-        const B hp = B::load_aligned(h + i);
-        xsimd::fma(z, hp - n, n).store_aligned(h + i);  // (1 - z) n + z h = n + z (h - n)
-      }
-      in = h;
+      gemv(lp.w_ih, in, lp.b_ih, s.gi);     // W_i{r,z,n} x + b_i{r,z,n}
+      gemv(lp.w_hh, s.h[k], lp.b_hh, s.gh);  // W_h{r,z,n} h + b_h{r,z,n}
+      gate_update(s, k);
+      in = s.h[k];
     }
-    for (int i = 0; i < Hp; i += kLanes<T>) Batch<T>::load_aligned(s.h[Layers - 1] + i).store_aligned(y + i);
+    copy_out(s, y);
+  }
+
+  // n instances at once (nn/batch.hpp): each weight matrix is streamed once for all of them, and
+  // every instance gets exactly forward()'s result (same products, same gate code).
+  static void forward_batch(const Params& p, State* const* s, int n, const T* const* x, T* const* y) noexcept {
+    const T* in[kBatchMax];
+    const T* h[kBatchMax];
+    T* gi[kBatchMax];
+    T* gh[kBatchMax];
+    for (int i = 0; i < n; ++i) in[i] = x[i], gi[i] = s[i]->gi, gh[i] = s[i]->gh;
+    for (int k = 0; k < Layers; ++k) {
+      const LayerParams& lp = p.layer[k];
+      for (int i = 0; i < n; ++i) h[i] = s[i]->h[k];
+      gemv_batch(lp.w_ih, n, in, lp.b_ih, gi);
+      gemv_batch(lp.w_hh, n, h, lp.b_hh, gh);
+      for (int i = 0; i < n; ++i) gate_update(*s[i], k), in[i] = s[i]->h[k];
+    }
+    for (int i = 0; i < n; ++i) copy_out(*s[i], y[i]);
   }
 
   static void reset(State& s) noexcept { s.reset(); }
+
+ private:
+  // h_k from the gate pre-activations in s.gi / s.gh.
+  static void gate_update(State& s, int k) noexcept {
+    using B = Batch<T>;
+    T* h = s.h[k];
+    for (int i = 0; i < Hp; i += kLanes<T>) {
+      const B r = sigmoid<T>(B::load_aligned(s.gi + i) + B::load_aligned(s.gh + i));
+      const B z = sigmoid<T>(B::load_aligned(s.gi + Hp + i) + B::load_aligned(s.gh + Hp + i));
+      const B n = xsimd::tanh(xsimd::fma(r, B::load_aligned(s.gh + 2 * Hp + i), B::load_aligned(s.gi + 2 * Hp + i)));
+      const B hp = B::load_aligned(h + i);
+      xsimd::fma(z, hp - n, n).store_aligned(h + i);  // (1 - z) n + z h = n + z (h - n)
+    }
+  }
+  static void copy_out(const State& s, T* y) noexcept {
+    for (int i = 0; i < Hp; i += kLanes<T>) Batch<T>::load_aligned(s.h[Layers - 1] + i).store_aligned(y + i);
+  }
 };
 
 }  // namespace sparsebody::nn

@@ -1,9 +1,10 @@
 // IEEE-754 binary16 weight storage ("f16"), an opt-in for layers whose weights stream from memory:
 // half the bytes per step. Values are widened to float on load into registers (F16C / AVX-512
-// vcvtph2ps where compiled for, a portable bit conversion otherwise) and all arithmetic stays in
-// float, so the only change from float storage is the rounding of each weight to 11 significant bits.
-// Worth it where a step is bound by DRAM/L3 bandwidth (e.g. a 1024-wide GRU, 12.6 MB in float);
-// for weights that fit in L2 the conversion costs about what the saved bytes gain.
+// vcvtph2ps, or NEON fcvtl on ARM64, where compiled for; a portable bit conversion otherwise) and all
+// arithmetic stays in float, so the only change from float storage is the rounding of each weight to
+// 11 significant bits. Worth it where a step is bound by DRAM/L3 bandwidth (e.g. a 1024-wide GRU,
+// 12.6 MB in float); for weights that fit in L2 the conversion costs about what the saved bytes gain
+// (nn/storage.hpp's fastest_storage() applies that rule).
 #pragma once
 #include <cmath>
 #include <cstdint>
@@ -21,6 +22,13 @@ struct f16 {
 };
 
 inline constexpr double kF16Max = 65504.0;
+
+// Whether this build widens f16 weights with an instruction (else: the slow portable conversion).
+#if defined(__F16C__) || defined(__AVX512F__) || (defined(__aarch64__) && defined(__ARM_NEON))
+inline constexpr bool kF16Hardware = true;
+#else
+inline constexpr bool kF16Hardware = false;
+#endif
 
 // Round-to-nearest-even float -> binary16, in portable C++ (values finite and within +/-65504).
 inline f16 to_f16_portable(float v) noexcept {

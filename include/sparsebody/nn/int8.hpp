@@ -1,14 +1,25 @@
-// int8 weight storage with dynamic activation quantization ("q8"), an opt-in for float networks
-// whose per-step weight stream does not fit in L2 in float (or f16): a quarter of the float bytes.
+// int8 weight storage with dynamic activation quantization ("q8"), an opt-in for float networks:
+// a quarter of the float bytes per step.
 //
 // Scheme (the one torch.ao.quantization.quantize_dynamic uses for Linear/GRU, symmetric variant):
 //   weights, per output row r, at load:  s_r = max_c |W_rc| / 127,  Q_rc = round(W_rc / s_r) in [-127, 127]
 //   input x, per product, at run time:   s_x = max_j |x_j| / 127,   q_j  = round(x_j / s_x)  in [-127, 127]
-//   y_r = b_r + s_r s_x sum_j Q_rj q_j   (the sum exact in int32)
-// AVX-512 VNNI's vpdpbusd multiplies unsigned by signed bytes, so the kernel feeds u_j = q_j + 128
-// and subtracts 128 sum_j Q_rj (precomputed per row): sum_j Q_rj u_j - 128 R_r = sum_j Q_rj q_j.
-// One vpdpbusd does 64 multiply-adds (16 rows x 4 columns), so the product is bound by the 1-byte
-// weight stream, not by arithmetic as the f16 path is (one vcvtph2ps per 16 weights).
+//   y_r = fma(float(S_r), s_r * s_x, b_r)  with  S_r = sum_j Q_rj q_j  exact in int32
+// -128 never occurs on either side (symmetric range); the AVX2 kernel relies on it (see there).
+//
+// Every kernel computes the same integer S_r and the same final fma, so all of them give the
+// portable path's result bit for bit (tests/nn/test_int8_kernels.cpp checks each one a build has):
+//   avx512_vnni  vpdpbusd zmm (u8 x s8, 4 products summed into int32): 64 multiply-adds/instruction.
+//                It takes unsigned u_j = q_j + 128 and subtracts 128 R_r (R_r = sum_j Q_rj, kept per row).
+//   avx_vnni     the same with the VEX ymm form (Alder Lake+, Zen 5): 32 per instruction.
+//   avx2         vpmaddubsw(|q_j|, sign(Q_rj, q_j)) then vpmaddwd(., 1): every int16 pair sum is at most
+//                2 * 127 * 127 = 32258 < 32767, so the saturating vpmaddubsw never saturates (it would
+//                with u_j = q_j + 128: 2 * 255 * 127), and vpsignb never negates -128.
+//   neon_dot     vdotq_s32 (ARMv8.2 dot product, s8 x s8, 4 products per int32 lane): 16 per instruction.
+//   neon         vmull_s8 + vmlal_s8 (two exact int16 products summed: at most 32258) + vpadalq_s16.
+//   portable     the same integer arithmetic in plain C++, one row at a time.
+// The build's best kernel (kQ8Kernel) is fixed at compile time from the target macros: no runtime
+// dispatch, no -march=native assumption; a generic build runs the portable kernel.
 //
 // Accuracy: each weight keeps ~8 bits relative to its row's largest, each input ~8 bits relative
 // to the vector's largest; typical GEMV outputs differ from float by ~1e-3 relative. Measure the
@@ -17,16 +28,36 @@
 // Layout (rows grouped like panel_matrix.hpp: panels of kPanelBatches batches of L = kLanes<float>
 // rows): inside a panel, for each group g of 4 columns, NB batches x L rows x 4 bytes, row-major
 // within the 4 bytes. Columns are padded to a multiple of 4 with zeros, rows with zero rows.
+// Every kernel reads V rows x 4 bytes per vector (V = 16, 8 or 4), so one layout serves all of
+// them wherever V divides the panel height (any kernel of a build runs on that build's layout).
 #pragma once
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 
 #include "sparsebody/nn/panel_matrix.hpp"
 
 #if defined(__AVX512F__) && defined(__AVX512VNNI__) && defined(__AVX512BW__)
-#include <immintrin.h>
 #define SPARSEBODY_Q8_AVX512 1
+#endif
+#if defined(__AVXVNNI__) && defined(__AVX2__) && defined(__FMA__)
+#define SPARSEBODY_Q8_AVXVNNI 1
+#endif
+#if defined(__AVX2__) && defined(__FMA__)
+#define SPARSEBODY_Q8_AVX2 1
+#endif
+#if defined(__aarch64__) && defined(__ARM_NEON)
+#define SPARSEBODY_Q8_NEON 1
+#if defined(__ARM_FEATURE_DOTPROD)
+#define SPARSEBODY_Q8_NEON_DOT 1
+#endif
+#endif
+#if defined(SPARSEBODY_Q8_AVX512) || defined(SPARSEBODY_Q8_AVX2)
+#include <immintrin.h>
+#endif
+#if defined(SPARSEBODY_Q8_NEON)
+#include <arm_neon.h>
 #endif
 
 namespace sparsebody::nn {
@@ -40,11 +71,70 @@ inline constexpr int kQ8MaxCols = 4096;
 
 constexpr int q8_groups(int cols) { return (cols + 3) / 4; }
 
+enum class Q8Kernel { portable, avx2, avx_vnni, avx512_vnni, neon, neon_dot };
+
+// Rows one vector of the kernel covers; the kernel runs on a build's layout when it divides the
+// lane count L (every panel height is a multiple of L).
+constexpr int q8_kernel_rows(Q8Kernel k) {
+  switch (k) {
+    case Q8Kernel::avx512_vnni: return 16;
+    case Q8Kernel::avx2:
+    case Q8Kernel::avx_vnni: return 8;
+    case Q8Kernel::neon:
+    case Q8Kernel::neon_dot: return 4;
+    default: return 1;
+  }
+}
+
+// Whether kernel k is compiled into this build and can run on its layout.
+constexpr bool q8_kernel_available(Q8Kernel k) {
+  if (kLanes<float> % q8_kernel_rows(k) != 0) return false;
+  switch (k) {
+    case Q8Kernel::portable: return true;
+#if SPARSEBODY_Q8_AVX512
+    case Q8Kernel::avx512_vnni: return true;
+#endif
+#if SPARSEBODY_Q8_AVXVNNI
+    case Q8Kernel::avx_vnni: return true;
+#endif
+#if SPARSEBODY_Q8_AVX2
+    case Q8Kernel::avx2: return true;
+#endif
+#if SPARSEBODY_Q8_NEON
+    case Q8Kernel::neon: return true;
+#endif
+#if SPARSEBODY_Q8_NEON_DOT
+    case Q8Kernel::neon_dot: return true;
+#endif
+    default: return false;
+  }
+}
+
+// The kernel gemv() uses in this build: the widest available.
+inline constexpr Q8Kernel kQ8Kernel =
+    q8_kernel_available(Q8Kernel::avx512_vnni) ? Q8Kernel::avx512_vnni
+    : q8_kernel_available(Q8Kernel::avx_vnni)  ? Q8Kernel::avx_vnni
+    : q8_kernel_available(Q8Kernel::avx2)      ? Q8Kernel::avx2
+    : q8_kernel_available(Q8Kernel::neon_dot)  ? Q8Kernel::neon_dot
+    : q8_kernel_available(Q8Kernel::neon)      ? Q8Kernel::neon
+                                               : Q8Kernel::portable;
+
+constexpr const char* q8_kernel_name(Q8Kernel k) {
+  switch (k) {
+    case Q8Kernel::avx512_vnni: return "AVX-512 VNNI";
+    case Q8Kernel::avx_vnni: return "AVX-VNNI";
+    case Q8Kernel::avx2: return "AVX2";
+    case Q8Kernel::neon_dot: return "NEON dot product";
+    case Q8Kernel::neon: return "NEON";
+    default: return "portable";
+  }
+}
+
 template <>
 struct PanelMatrix<float, q8> {
   const std::int8_t* data = nullptr;     // Q, panel layout above
   const float* row_scale = nullptr;      // s_r, padded rows (padding 0)
-  const std::int32_t* row_sum = nullptr; // R_r = sum_c Q_rc, padded rows
+  const std::int32_t* row_sum = nullptr; // R_r = sum_c Q_rc, padded rows (for the VNNI kernels)
   int rows = 0;                          // packed rows; the product writes padded<float>(rows)
   int cols = 0;
 };
@@ -69,7 +159,7 @@ void pack_q8(const Src* src, int rows, int cols, std::int8_t* dst, float* scale,
     std::int32_t total = 0;
     for (int c = 0; c < cols; ++c) {
       const double q = std::nearbyint(static_cast<double>(w[c]) / s);
-      const int qi = static_cast<int>(std::clamp(q, -127.0, 127.0));
+      const int qi = static_cast<int>(std::clamp(q, -127.0, 127.0));  // symmetric: never -128
       base[static_cast<std::size_t>(c / 4) * nb * L * 4 + static_cast<std::size_t>(pr - panel_row0) * 4 + c % 4] =
           static_cast<std::int8_t>(qi);
       total += qi;
@@ -81,23 +171,51 @@ void pack_q8(const Src* src, int rows, int cols, std::int8_t* dst, float* scale,
 
 namespace detail {
 
-// u_j = round(x_j / s_x) + 128 for j < cols, 128 for the padding up to 4 * q8_groups(cols).
-// Returns s_x; 0 when x is all zero; NaN when x holds a NaN or an infinity.
-inline float quantize_input_q8(const float* x, int cols, std::uint8_t* u) noexcept {
+// Input quantization: q_j = round(x_j / s_x) (ties to even, as the scheme's nearbyint) for j < cols,
+// 0 for the padding up to 4 * q8_groups(cols). Returns s_x; 0 when x is all zero; NaN when x holds
+// a NaN or an infinity. The SIMD loops compute the same floats (amax is order-independent, then
+// the same scalar inv = 127 / amax and one rounding of x_j * inv), so they give the scalar result.
+template <bool kSimd = true>
+inline float quantize_input_q8(const float* x, int cols, std::int8_t* q) noexcept {
   float amax = 0;
   bool finite = true;
   int j = 0;
+  if constexpr (kSimd) {
 #if SPARSEBODY_Q8_AVX512
-  __m512 vmax = _mm512_setzero_ps();
-  __m512 vbad = _mm512_setzero_ps();  // x - x: 0 for finite values, NaN otherwise
-  for (; j + 16 <= cols; j += 16) {
-    const __m512 v = _mm512_loadu_ps(x + j);
-    vmax = _mm512_max_ps(vmax, _mm512_abs_ps(v));
-    vbad = _mm512_add_ps(vbad, _mm512_sub_ps(v, v));
-  }
-  amax = _mm512_reduce_max_ps(vmax);
-  finite = _mm512_cmp_ps_mask(vbad, vbad, _CMP_UNORD_Q) == 0;
+    __m512 vmax = _mm512_setzero_ps();
+    __m512 vbad = _mm512_setzero_ps();  // x - x: 0 for finite values, NaN otherwise
+    for (; j + 16 <= cols; j += 16) {
+      const __m512 v = _mm512_loadu_ps(x + j);
+      vmax = _mm512_max_ps(vmax, _mm512_abs_ps(v));
+      vbad = _mm512_add_ps(vbad, _mm512_sub_ps(v, v));
+    }
+    amax = _mm512_reduce_max_ps(vmax);
+    finite = _mm512_cmp_ps_mask(vbad, vbad, _CMP_UNORD_Q) == 0;
+#elif SPARSEBODY_Q8_AVX2
+    const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+    __m256 vmax = _mm256_setzero_ps();
+    __m256 vbad = _mm256_setzero_ps();
+    for (; j + 8 <= cols; j += 8) {
+      const __m256 v = _mm256_loadu_ps(x + j);
+      vmax = _mm256_max_ps(vmax, _mm256_and_ps(v, absmask));
+      vbad = _mm256_add_ps(vbad, _mm256_sub_ps(v, v));
+    }
+    alignas(32) float lanes[8];
+    _mm256_store_ps(lanes, vmax);
+    for (float v : lanes) amax = std::max(amax, v);
+    finite = _mm256_movemask_ps(_mm256_cmp_ps(vbad, vbad, _CMP_UNORD_Q)) == 0;
+#elif SPARSEBODY_Q8_NEON
+    float32x4_t vmax = vdupq_n_f32(0.f);
+    float32x4_t vbad = vdupq_n_f32(0.f);
+    for (; j + 4 <= cols; j += 4) {
+      const float32x4_t v = vld1q_f32(x + j);
+      vmax = vmaxq_f32(vmax, vabsq_f32(v));
+      vbad = vaddq_f32(vbad, vsubq_f32(v, v));
+    }
+    amax = vmaxvq_f32(vmax);
+    finite = vminvq_u32(vceqq_f32(vbad, vbad)) != 0;  // NaN != NaN
 #endif
+  }
   for (int k = j; k < cols; ++k) {
     finite = finite && std::isfinite(x[k]);
     amax = std::max(amax, std::abs(x[k]));
@@ -106,82 +224,203 @@ inline float quantize_input_q8(const float* x, int cols, std::uint8_t* u) noexce
   if (amax == 0.0f) return 0.0f;
   const float inv = 127.0f / amax;
   j = 0;
+  if constexpr (kSimd) {
 #if SPARSEBODY_Q8_AVX512
-  const __m512 vinv = _mm512_set1_ps(inv);
-  const __m512i bias = _mm512_set1_epi32(128);
-  for (; j + 16 <= cols; j += 16) {
-    const __m512i q = _mm512_cvtps_epi32(_mm512_mul_ps(_mm512_loadu_ps(x + j), vinv));  // nearest-even
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(u + j), _mm512_cvtepi32_epi8(_mm512_add_epi32(q, bias)));
-  }
+    const __m512 vinv = _mm512_set1_ps(inv);
+    for (; j + 16 <= cols; j += 16) {
+      const __m512i v = _mm512_cvtps_epi32(_mm512_mul_ps(_mm512_loadu_ps(x + j), vinv));  // nearest-even
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(q + j), _mm512_cvtepi32_epi8(v));
+    }
+#elif SPARSEBODY_Q8_AVX2
+    const __m256 vinv = _mm256_set1_ps(inv);
+    for (; j + 8 <= cols; j += 8) {
+      const __m256i v = _mm256_cvtps_epi32(_mm256_mul_ps(_mm256_loadu_ps(x + j), vinv));  // nearest-even
+      const __m256i h = _mm256_packs_epi32(v, v);  // per 128-bit half: its 4 values as int16, twice
+      const __m256i b = _mm256_packs_epi16(h, h);  // ... as bytes, the first 4 are the half's values
+      const std::int32_t lo = _mm_cvtsi128_si32(_mm256_castsi256_si128(b));
+      const std::int32_t hi = _mm_cvtsi128_si32(_mm256_extracti128_si256(b, 1));
+      std::memcpy(q + j, &lo, 4);
+      std::memcpy(q + j + 4, &hi, 4);
+    }
+#elif SPARSEBODY_Q8_NEON
+    const float32x4_t vinv = vdupq_n_f32(inv);
+    for (; j + 8 <= cols; j += 8) {
+      const int32x4_t a = vcvtnq_s32_f32(vmulq_f32(vld1q_f32(x + j), vinv));  // nearest-even
+      const int32x4_t b = vcvtnq_s32_f32(vmulq_f32(vld1q_f32(x + j + 4), vinv));
+      vst1_s8(q + j, vmovn_s16(vcombine_s16(vmovn_s32(a), vmovn_s32(b))));
+    }
 #endif
-  for (; j < cols; ++j) u[j] = static_cast<std::uint8_t>(static_cast<int>(std::nearbyint(x[j] * inv)) + 128);
-  for (; j < 4 * q8_groups(cols); ++j) u[j] = 128;
+  }
+  for (; j < cols; ++j) q[j] = static_cast<std::int8_t>(static_cast<int>(std::nearbyint(x[j] * inv)));
+  for (; j < 4 * q8_groups(cols); ++j) q[j] = 0;
   return amax / 127.0f;
 }
 
-// One panel of NB batches: int32 dot products, then y = b + s_r s_x (acc - 128 R_r).
-template <int NB>
-inline void q8_panel(const std::int8_t* __restrict w, int groups, const std::uint8_t* __restrict u, float sx,
+// The 4 input bytes of column group g as one 32-bit word (each kernel broadcasts it).
+inline std::int32_t q8_group_word(const std::int8_t* q, int g) noexcept {
+  std::int32_t v;
+  std::memcpy(&v, q + 4 * g, 4);
+  return v;
+}
+
+// One panel of R = NB * L rows with kernel K: S_r (exact int32), then y_r = fma(S_r, s_r s_x, b_r).
+// w advances NB * L * 4 bytes per column group. Multi-chain kernels split the groups over K
+// accumulator sets (a latency of 3-5 cycles per multiply-add instruction needs >= 8 in flight).
+template <Q8Kernel Kern, int NB>
+inline void q8_panel(const std::int8_t* __restrict w, int groups, const std::int8_t* __restrict q, float sx,
                      const float* __restrict scale, const std::int32_t* __restrict sum, const float* __restrict bias,
                      float* __restrict y) noexcept {
-  constexpr int L = kLanes<float>;
+  constexpr int R = NB * kLanes<float>;
+  static_assert(q8_kernel_available(Kern), "q8 kernel not compiled into this build");
+  [[maybe_unused]] constexpr int NV = R / q8_kernel_rows(Kern);  // vectors per column group
+  [[maybe_unused]] constexpr int K = 8 / NV > 1 ? 8 / NV : 1;   // accumulator sets
+  (void)sum;  // only the VNNI kernels (unsigned inputs) need the row sums
 #if SPARSEBODY_Q8_AVX512
-  if constexpr (L == 16) {
-    // vpdpbusd: 5-cycle latency, 1 per cycle: 8 independent accumulators keep it busy.
-    constexpr int K = 8 / NB > 1 ? 8 / NB : 1;
-    __m512i acc[K][NB];
+  if constexpr (Kern == Q8Kernel::avx512_vnni) {
+    __m512i acc[K][NV];
     for (int k = 0; k < K; ++k)
-      for (int b = 0; b < NB; ++b) acc[k][b] = _mm512_setzero_si512();
-    std::int32_t u4;
+      for (int b = 0; b < NV; ++b) acc[k][b] = _mm512_setzero_si512();
+    auto step = [&](int k, int g) {
+      const __m512i ub = _mm512_set1_epi32(q8_group_word(q, g) ^ static_cast<std::int32_t>(0x80808080u));  // u = q + 128
+      const std::int8_t* wg = w + static_cast<std::size_t>(g) * R * 4;
+      for (int b = 0; b < NV; ++b)
+        acc[k][b] = _mm512_dpbusd_epi32(acc[k][b], ub, _mm512_load_si512(reinterpret_cast<const void*>(wg + b * 64)));
+    };
     int g = 0;
-    for (; g + K <= groups; g += K) {
-      for (int k = 0; k < K; ++k) {
-        std::memcpy(&u4, u + 4 * (g + k), 4);
-        const __m512i ub = _mm512_set1_epi32(u4);
-        const std::int8_t* wg = w + static_cast<std::size_t>(g + k) * NB * 64;
-        for (int b = 0; b < NB; ++b)
-          acc[k][b] = _mm512_dpbusd_epi32(acc[k][b], ub, _mm512_load_si512(reinterpret_cast<const void*>(wg + b * 64)));
-      }
-    }
-    for (; g < groups; ++g) {
-      std::memcpy(&u4, u + 4 * g, 4);
-      const __m512i ub = _mm512_set1_epi32(u4);
-      const std::int8_t* wg = w + static_cast<std::size_t>(g) * NB * 64;
-      for (int b = 0; b < NB; ++b)
-        acc[0][b] = _mm512_dpbusd_epi32(acc[0][b], ub, _mm512_load_si512(reinterpret_cast<const void*>(wg + b * 64)));
-    }
+    for (; g + K <= groups; g += K)
+      for (int k = 0; k < K; ++k) step(k, g + k);
+    for (; g < groups; ++g) step(0, g);
     const __m512 vsx = _mm512_set1_ps(sx);
-    for (int b = 0; b < NB; ++b) {
+    for (int b = 0; b < NV; ++b) {
       __m512i s = acc[0][b];
       for (int k = 1; k < K; ++k) s = _mm512_add_epi32(s, acc[k][b]);
-      s = _mm512_sub_epi32(s, _mm512_slli_epi32(_mm512_load_si512(reinterpret_cast<const void*>(sum + b * 16)), 7));
-      const __m512 f = _mm512_mul_ps(_mm512_load_ps(scale + b * 16), vsx);
-      const __m512 bb = bias ? _mm512_load_ps(bias + b * 16) : _mm512_setzero_ps();
-      _mm512_store_ps(y + b * 16, _mm512_fmadd_ps(_mm512_cvtepi32_ps(s), f, bb));
+      s = _mm512_sub_epi32(s, _mm512_slli_epi32(_mm512_loadu_si512(reinterpret_cast<const void*>(sum + b * 16)), 7));
+      const __m512 f = _mm512_mul_ps(_mm512_loadu_ps(scale + b * 16), vsx);
+      const __m512 bb = bias ? _mm512_loadu_ps(bias + b * 16) : _mm512_setzero_ps();
+      _mm512_storeu_ps(y + b * 16, _mm512_fmadd_ps(_mm512_cvtepi32_ps(s), f, bb));
+    }
+    return;
+  }
+#endif
+#if SPARSEBODY_Q8_AVX2
+  if constexpr (Kern == Q8Kernel::avx2 || Kern == Q8Kernel::avx_vnni) {
+    __m256i acc[K][NV];
+    for (int k = 0; k < K; ++k)
+      for (int b = 0; b < NV; ++b) acc[k][b] = _mm256_setzero_si256();
+    [[maybe_unused]] const __m256i ones = _mm256_set1_epi16(1);
+    auto step = [&](int k, int g) {
+      const std::int8_t* wg = w + static_cast<std::size_t>(g) * R * 4;
+      if constexpr (Kern == Q8Kernel::avx_vnni) {
+#if SPARSEBODY_Q8_AVXVNNI
+        const __m256i ub = _mm256_set1_epi32(q8_group_word(q, g) ^ static_cast<std::int32_t>(0x80808080u));
+        for (int b = 0; b < NV; ++b)
+          acc[k][b] = _mm256_dpbusd_avx_epi32(acc[k][b], ub, _mm256_load_si256(reinterpret_cast<const __m256i*>(wg + b * 32)));
+#endif
+      } else {
+        const __m256i qb = _mm256_set1_epi32(q8_group_word(q, g));
+        const __m256i qa = _mm256_abs_epi8(qb);  // |q| as unsigned bytes (<= 127)
+        for (int b = 0; b < NV; ++b) {
+          const __m256i ws = _mm256_sign_epi8(_mm256_load_si256(reinterpret_cast<const __m256i*>(wg + b * 32)), qb);
+          acc[k][b] = _mm256_add_epi32(acc[k][b], _mm256_madd_epi16(_mm256_maddubs_epi16(qa, ws), ones));
+        }
+      }
+    };
+    int g = 0;
+    for (; g + K <= groups; g += K)
+      for (int k = 0; k < K; ++k) step(k, g + k);
+    for (; g < groups; ++g) step(0, g);
+    const __m256 vsx = _mm256_set1_ps(sx);
+    for (int b = 0; b < NV; ++b) {
+      __m256i s = acc[0][b];
+      for (int k = 1; k < K; ++k) s = _mm256_add_epi32(s, acc[k][b]);
+      if constexpr (Kern == Q8Kernel::avx_vnni)
+        s = _mm256_sub_epi32(s, _mm256_slli_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(sum + b * 8)), 7));
+      const __m256 f = _mm256_mul_ps(_mm256_loadu_ps(scale + b * 8), vsx);
+      const __m256 bb = bias ? _mm256_loadu_ps(bias + b * 8) : _mm256_setzero_ps();
+      _mm256_storeu_ps(y + b * 8, _mm256_fmadd_ps(_mm256_cvtepi32_ps(s), f, bb));
+    }
+    return;
+  }
+#endif
+#if SPARSEBODY_Q8_NEON
+  if constexpr (Kern == Q8Kernel::neon_dot || Kern == Q8Kernel::neon) {
+    int32x4_t sums[NV];
+    if constexpr (Kern == Q8Kernel::neon_dot) {
+#if SPARSEBODY_Q8_NEON_DOT
+      int32x4_t acc[K][NV];
+      for (int k = 0; k < K; ++k)
+        for (int b = 0; b < NV; ++b) acc[k][b] = vdupq_n_s32(0);
+      auto step = [&](int k, int g) {
+        const int8x16_t qb = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(q, g)));
+        const std::int8_t* wg = w + static_cast<std::size_t>(g) * R * 4;
+        for (int b = 0; b < NV; ++b) acc[k][b] = vdotq_s32(acc[k][b], vld1q_s8(wg + b * 16), qb);
+      };
+      int g = 0;
+      for (; g + K <= groups; g += K)
+        for (int k = 0; k < K; ++k) step(k, g + k);
+      for (; g < groups; ++g) step(0, g);
+      for (int b = 0; b < NV; ++b) {
+        sums[b] = acc[0][b];
+        for (int k = 1; k < K; ++k) sums[b] = vaddq_s32(sums[b], acc[k][b]);
+      }
+#endif
+    } else {
+      // Per vector (rows 0-3 x 4 columns), lo/hi: rows 0-1 / 2-3, each int32 lane half a row;
+      // two groups' int16 products are summed before widening (|sum| <= 2 * 127 * 127).
+      int32x4_t lo[NV], hi[NV];
+      for (int b = 0; b < NV; ++b) lo[b] = hi[b] = vdupq_n_s32(0);
+      int g = 0;
+      for (; g + 2 <= groups; g += 2) {
+        const int8x16_t q0 = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(q, g)));
+        const int8x16_t q1 = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(q, g + 1)));
+        const std::int8_t* w0 = w + static_cast<std::size_t>(g) * R * 4;
+        const std::int8_t* w1 = w0 + R * 4;
+        for (int b = 0; b < NV; ++b) {
+          const int8x16_t a = vld1q_s8(w0 + b * 16), c = vld1q_s8(w1 + b * 16);
+          lo[b] = vpadalq_s16(lo[b], vmlal_s8(vmull_s8(vget_low_s8(a), vget_low_s8(q0)), vget_low_s8(c), vget_low_s8(q1)));
+          hi[b] = vpadalq_s16(hi[b], vmlal_high_s8(vmull_high_s8(a, q0), c, q1));
+        }
+      }
+      for (; g < groups; ++g) {
+        const int8x16_t q0 = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(q, g)));
+        const std::int8_t* w0 = w + static_cast<std::size_t>(g) * R * 4;
+        for (int b = 0; b < NV; ++b) {
+          const int8x16_t a = vld1q_s8(w0 + b * 16);
+          lo[b] = vpadalq_s16(lo[b], vmull_s8(vget_low_s8(a), vget_low_s8(q0)));
+          hi[b] = vpadalq_s16(hi[b], vmull_high_s8(a, q0));
+        }
+      }
+      for (int b = 0; b < NV; ++b) sums[b] = vpaddq_s32(lo[b], hi[b]);  // [r0, r1, r2, r3]
+    }
+    const float32x4_t vsx = vdupq_n_f32(sx);
+    for (int b = 0; b < NV; ++b) {
+      const float32x4_t f = vmulq_f32(vld1q_f32(scale + b * 4), vsx);
+      const float32x4_t bb = bias ? vld1q_f32(bias + b * 4) : vdupq_n_f32(0.f);
+      vst1q_f32(y + b * 4, vfmaq_f32(bb, vcvtq_f32_s32(sums[b]), f));
     }
     return;
   }
 #endif
   // Portable path: the same integer arithmetic, one row at a time.
-  for (int r = 0; r < NB * L; ++r) {
+  for (int r = 0; r < R; ++r) {
     std::int32_t acc = 0;
     for (int g = 0; g < groups; ++g)
       for (int c = 0; c < 4; ++c)
-        acc += static_cast<std::int32_t>(w[static_cast<std::size_t>(g) * NB * L * 4 + r * 4 + c]) * u[4 * g + c];
-    acc -= 128 * sum[r];
+        acc += static_cast<std::int32_t>(w[static_cast<std::size_t>(g) * R * 4 + r * 4 + c]) * q[4 * g + c];
     y[r] = std::fma(static_cast<float>(acc), scale[r] * sx, bias ? bias[r] : 0.0f);
   }
 }
 
 }  // namespace detail
 
-// y[0 .. padded(rows)) = W x + bias with int8 weights (see top). A non-finite x gives NaN outputs
-// (so guarded steps see it), an all-zero x gives the bias.
-inline void gemv(const PanelMatrix<float, q8>& W, const float* x, const float* bias, float* y) noexcept {
+// y[0 .. padded(rows)) = W x + bias with int8 weights, using kernel Kern (see top; default: the
+// build's best). A non-finite x gives NaN outputs (so guarded steps see it), an all-zero x the bias.
+template <Q8Kernel Kern = kQ8Kernel>
+inline void gemv_q8(const PanelMatrix<float, q8>& W, const float* x, const float* bias, float* y) noexcept {
   constexpr int L = kLanes<float>;
   constexpr int P = kPanelBatches * L;
-  alignas(64) std::uint8_t u[kQ8MaxCols + 4];
-  const float sx = detail::quantize_input_q8(x, W.cols, u);
+  alignas(64) std::int8_t q[kQ8MaxCols + 4];
+  const float sx = detail::quantize_input_q8<Kern != Q8Kernel::portable>(x, W.cols, q);
   const int prows = padded<float>(W.rows);
   if (!(sx > 0.0f)) {  // zero input: y = b; NaN input: NaN
     for (int r = 0; r < prows; ++r) y[r] = sx == 0.0f ? (bias ? bias[r] : 0.0f) : NAN;
@@ -191,21 +430,32 @@ inline void gemv(const PanelMatrix<float, q8>& W, const float* x, const float* b
   const std::int8_t* w = W.data;
   int r0 = 0;
   for (; r0 + P <= prows; r0 += P, w += static_cast<std::size_t>(P) * 4 * groups)
-    detail::q8_panel<kPanelBatches>(w, groups, u, sx, W.row_scale + r0, W.row_sum + r0, bias ? bias + r0 : nullptr, y + r0);
+    detail::q8_panel<Kern, kPanelBatches>(w, groups, q, sx, W.row_scale + r0, W.row_sum + r0, bias ? bias + r0 : nullptr, y + r0);
   const int rest = (prows - r0) / L;
   const float* b = bias ? bias + r0 : nullptr;
   const float* s = W.row_scale + r0;
   const std::int32_t* rs = W.row_sum + r0;
-  switch (rest) {
+  switch (rest) {  // compile-time batch counts keep the accumulators in registers
     case 0: break;
-    case 1: detail::q8_panel<1>(w, groups, u, sx, s, rs, b, y + r0); break;
-    case 2: detail::q8_panel<2>(w, groups, u, sx, s, rs, b, y + r0); break;
-    case 3: detail::q8_panel<3>(w, groups, u, sx, s, rs, b, y + r0); break;
-    case 4: detail::q8_panel<4>(w, groups, u, sx, s, rs, b, y + r0); break;
-    case 5: detail::q8_panel<5>(w, groups, u, sx, s, rs, b, y + r0); break;
-    case 6: detail::q8_panel<6>(w, groups, u, sx, s, rs, b, y + r0); break;
-    default: detail::q8_panel<7>(w, groups, u, sx, s, rs, b, y + r0); break;
+    case 1: detail::q8_panel<Kern, 1>(w, groups, q, sx, s, rs, b, y + r0); break;
+    case 2: detail::q8_panel<Kern, 2>(w, groups, q, sx, s, rs, b, y + r0); break;
+    case 3: detail::q8_panel<Kern, 3>(w, groups, q, sx, s, rs, b, y + r0); break;
+    case 4: detail::q8_panel<Kern, 4>(w, groups, q, sx, s, rs, b, y + r0); break;
+    case 5: detail::q8_panel<Kern, 5>(w, groups, q, sx, s, rs, b, y + r0); break;
+    case 6: detail::q8_panel<Kern, 6>(w, groups, q, sx, s, rs, b, y + r0); break;
+    default: detail::q8_panel<Kern, 7>(w, groups, q, sx, s, rs, b, y + r0); break;
   }
+}
+
+inline void gemv(const PanelMatrix<float, q8>& W, const float* x, const float* bias, float* y) noexcept {
+  gemv_q8<kQ8Kernel>(W, x, bias, y);
+}
+
+// Batched int8 product: one product per instance for now (each quantizes its own input); it does
+// not yet share weight loads across instances as the float/f16 gemv_batch does.
+inline void gemv_batch(const PanelMatrix<float, q8>& W, int n, const float* const* x, const float* bias,
+                       float* const* y) noexcept {
+  for (int i = 0; i < n; ++i) gemv_q8<kQ8Kernel>(W, x[i], bias, y[i]);
 }
 
 }  // namespace sparsebody::nn

@@ -21,9 +21,15 @@
 #include "sparsebody/nn/half.hpp"
 #include "sparsebody/nn/simd.hpp"
 
+#if defined(__aarch64__) && defined(__ARM_NEON)
+#include <arm_neon.h>
+#endif
+
 namespace sparsebody::nn {
 
 inline constexpr int kPanelBatches = 8;
+// Most instances one batched step (nn/batch.hpp) takes: its pointer arrays live on the stack.
+inline constexpr int kBatchMax = 64;
 
 // Number of stored values (including zero padding) of a rows x cols matrix in panel layout.
 template <typename T>
@@ -56,6 +62,10 @@ inline Batch<T> load_weights(const W* p) noexcept {
 #endif
 #if defined(__F16C__)
     if constexpr (kLanes<float> == 4) return Batch<float>(_mm_cvtph_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p))));
+#endif
+#if defined(__aarch64__) && defined(__ARM_NEON)
+    // fcvtl: exact widening (every binary16 value is a float), so it equals to_float_portable.
+    if constexpr (kLanes<float> == 4) return Batch<float>(vcvt_f32_f16(vreinterpret_f16_u16(vld1_u16(reinterpret_cast<const std::uint16_t*>(p)))));
 #endif
     alignas(kBufferAlign) float tmp[kLanes<float>];  // portable path (no F16C): correct, slower
     for (int i = 0; i < kLanes<float>; ++i) tmp[i] = to_float(p[i]);
@@ -141,6 +151,77 @@ inline void gemv(const PanelMatrix<T, Wt>& W, const T* x, const T* bias, T* y) n
     case 5: detail::panel_gemv<T, Wt, 5>(w, W.cols, x, b, y + r0); break;
     case 6: detail::panel_gemv<T, Wt, 6>(w, W.cols, x, b, y + r0); break;
     default: detail::panel_gemv<T, Wt, 7>(w, W.cols, x, b, y + r0); break;
+  }
+}
+
+// Batched product for n instances sharing W (NetworkBatch, nn/batch.hpp): y[i] = W x[i] + bias for
+// i < n. Each y[i] equals gemv(W, x[i], bias, y[i]) bit for bit: every instance keeps the single
+// product's FMA chains (same K accumulator sets, same column order, same final sum). What changes is
+// the loop order: one batch of rows at a time, each weight batch loaded once for a tile of up to
+// kFmaChains / K instances, so a weight comes from memory once per frame for all instances and
+// from cache once per tile.
+namespace detail {
+template <typename T, typename W, int NB, int NI>
+inline void panel_gemv_tile(const W* __restrict w, int cols, int b, const T* const* x, const T* bias, T* const* y,
+                            int row0) noexcept {
+  using B = Batch<T>;
+  constexpr int L = kLanes<T>;
+  constexpr int K = kFmaChains<T> / NB > 1 ? kFmaChains<T> / NB : 1;  // as panel_gemv
+  B acc[K][NI];
+  for (int k = 0; k < K; ++k)
+    for (int i = 0; i < NI; ++i) acc[k][i] = B(T(0));
+  const W* wb = w + b * L;
+  int j = 0;
+  for (; j + K <= cols; j += K)
+    for (int k = 0; k < K; ++k) {
+      const B wv = load_weights<T, W>(wb + static_cast<std::size_t>(j + k) * NB * L);
+      for (int i = 0; i < NI; ++i) acc[k][i] = xsimd::fma(wv, B(x[i][j + k]), acc[k][i]);
+    }
+  for (; j < cols; ++j) {
+    const B wv = load_weights<T, W>(wb + static_cast<std::size_t>(j) * NB * L);
+    for (int i = 0; i < NI; ++i) acc[0][i] = xsimd::fma(wv, B(x[i][j]), acc[0][i]);
+  }
+  for (int i = 0; i < NI; ++i) {
+    B sum = bias ? B::load_aligned(bias + b * L) : B(T(0));
+    for (int k = 0; k < K; ++k) sum += acc[k][i];
+    sum.store_aligned(y[i] + row0 + b * L);
+  }
+}
+
+template <typename T, typename W, int NB>
+inline void panel_gemv_batch(const W* w, int cols, int n, const T* const* x, const T* bias, T* const* y,
+                             int row0) noexcept {
+  constexpr int K = kFmaChains<T> / NB > 1 ? kFmaChains<T> / NB : 1;
+  constexpr int NI = 8 / K > 1 ? 8 / K : 1;  // K * NI <= 8 accumulators (+ weights, broadcasts)
+  const int tiled = NI > 1 ? n / NI * NI : 0;
+  for (int b = 0; b < NB; ++b)
+    for (int i = 0; i < tiled; i += NI) panel_gemv_tile<T, W, NB, NI>(w, cols, b, x + i, bias, y + i, row0);
+  // The instances left over (all of them when a tile would hold one): the single product, which
+  // keeps all NB * K accumulators busy instead of K.
+  for (int i = tiled; i < n; ++i) panel_gemv<T, W, NB>(w, cols, x[i], bias, y[i] + row0);
+}
+}  // namespace detail
+
+template <typename T, typename Wt>
+inline void gemv_batch(const PanelMatrix<T, Wt>& W, int n, const T* const* x, const T* bias, T* const* y) noexcept {
+  constexpr int L = kLanes<T>;
+  constexpr int P = kPanelBatches * L;
+  const int prows = padded<T>(W.rows);
+  const Wt* w = W.data;
+  int r0 = 0;
+  for (; r0 + P <= prows; r0 += P, w += static_cast<std::size_t>(P) * W.cols)
+    detail::panel_gemv_batch<T, Wt, kPanelBatches>(w, W.cols, n, x, bias ? bias + r0 : nullptr, y, r0);
+  const int rest = (prows - r0) / L;
+  const T* b = bias ? bias + r0 : nullptr;
+  switch (rest) {
+    case 0: break;
+    case 1: detail::panel_gemv_batch<T, Wt, 1>(w, W.cols, n, x, b, y, r0); break;
+    case 2: detail::panel_gemv_batch<T, Wt, 2>(w, W.cols, n, x, b, y, r0); break;
+    case 3: detail::panel_gemv_batch<T, Wt, 3>(w, W.cols, n, x, b, y, r0); break;
+    case 4: detail::panel_gemv_batch<T, Wt, 4>(w, W.cols, n, x, b, y, r0); break;
+    case 5: detail::panel_gemv_batch<T, Wt, 5>(w, W.cols, n, x, b, y, r0); break;
+    case 6: detail::panel_gemv_batch<T, Wt, 6>(w, W.cols, n, x, b, y, r0); break;
+    default: detail::panel_gemv_batch<T, Wt, 7>(w, W.cols, n, x, b, y, r0); break;
   }
 }
 
