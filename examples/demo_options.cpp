@@ -15,7 +15,7 @@ void usage(const char* msg) {
                "                       [--weights FILE (LoBSTr) | DIR (Neural3Points: n3p_{signal,lower,upper}.json)]\n"
                "                       [--mode streaming|window] [--no-contact-ik] [--trackers-out trackers.csv]\n"
                "                       [--calibration-frame N] [--devices [--device-seed S] [--devices-stand T]]\n"
-               "                       [--storage float|f16|q8]\n"
+               "                       [--storage auto|float|f16|q8]\n"
                "                       [--physics] [--quiet]\n"
                "calibration: automatic from standing windows (default); --calibration-frame N forces input frame N\n"
                "             (a T-pose or an upright standing frame); BVH input without --devices is sized by leg length\n"

@@ -3,7 +3,7 @@
 //   sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p] [--no-pelvis]
 //                   [--weights FILE|DIR] [--mode streaming|window] [--no-contact-ik]
 //                   [--trackers-out trackers.csv] [--calibration-frame N] [--devices [--device-seed S]]
-//                   [--storage float|f16|q8] [--physics] [--quiet]
+//                   [--storage auto|float|f16|q8] [--physics] [--quiet]
 //
 // Model choice (--model auto, the default): LoBSTr when the input has a pelvis tracker (it needs
 // one), Neural3Points (direct mode) when it has only the headset and controllers, which is what
@@ -13,7 +13,7 @@
 // servos, the default model-based controller with its bounded residual wrench; avatar/n3p_physics.hpp).
 // Its output is 0.1 s behind the input; the metrics compare it with the frame it reproduces, and the
 // residual wrench and falls are printed at the end.
-// --storage picks how the network weights are held: float, f16 (half the bytes) or q8 (int8, a
+// --storage picks how the network weights are held: auto (the default: the build's fastest, nn/storage.hpp), float, f16 (half the bytes) or q8 (int8, a
 // quarter). The default is q8 where this build has the AVX-512 VNNI kernel (validation accuracy is
 // the same as float to 0.01 cm, the frame 2-4x faster) and float elsewhere (the portable int8 path is
 // exact but slow). See the README for speed and accuracy of each.
