@@ -13,10 +13,10 @@
 // servos, the default model-based controller with its bounded residual wrench; avatar/n3p_physics.hpp).
 // Its output is 0.1 s behind the input; the metrics compare it with the frame it reproduces, and the
 // residual wrench and falls are printed at the end.
-// --storage picks how the network weights are held: auto (the default: the build's fastest, nn/storage.hpp), float, f16 (half the bytes) or q8 (int8, a
-// quarter). The default is q8 where this build has the AVX-512 VNNI kernel (validation accuracy is
-// the same as float to 0.01 cm, the frame 2-4x faster) and float elsewhere (the portable int8 path is
-// exact but slow). See the README for speed and accuracy of each.
+// --storage picks how the network weights are held: float, f16 (half the bytes) or q8 (int8, a
+// quarter). The default, auto, takes the build's fastest (nn/storage.hpp fastest_storage: q8 where
+// the target has an int8 kernel - AVX2, AVX-VNNI, AVX-512 VNNI, NEON - and prints the choice and
+// why); validation accuracy of q8 is that of float to 0.01 cm. See the README for each one's speed.
 //
 // Calibration: automatic by default. The pipeline looks for the user standing still (features/
 // auto_calibration.hpp) and runs with the default body until it finds it; the demo prints what it
