@@ -27,9 +27,40 @@ bool finite(const n3p_test::SmallPipeline& p) {
 avatar::N3PConfig no_ik() {
   avatar::N3PConfig c;
   c.foot_ik = c.hand_ik = false;
+  c.anchor_head = false;  // the predictor's own output: no post-processing at all
   return c;
 }
 }  // namespace
+
+TEST_CASE("n3p pipeline: the head anchor keeps the predicted head on the headset horizontally, in bounded steps") {
+  const auto& g = golden();
+  auto head_error = [&](bool anchor, double* max_root_step) {
+    avatar::N3PConfig c;
+    c.anchor_head = anchor;
+    n3p_test::SmallPipeline p(weights(), c);
+    p.set_calibration({});
+    const int head = p.skeleton().find("Head");
+    double sum = 0, prev_x = 0, prev_z = 0;
+    int n = 0;
+    *max_root_step = 0;
+    for (int t = 0; t < g["frames"].get<int>(); ++t) {
+      const auto f = n3p_test::golden_frame(g, t);
+      REQUIRE(p.push(f) == 1);
+      const Eigen::Vector3d d = p.world().position[head] - trackers::to_eigen(f.pose[0].position);
+      sum += std::hypot(d.x(), d.z());
+      ++n;
+      const Eigen::Vector3d r = p.pose().root_position;
+      if (t > 0) *max_root_step = std::max(*max_root_step, std::hypot(r.x() - prev_x, r.z() - prev_z));
+      prev_x = r.x(), prev_z = r.z();
+    }
+    return sum / n;
+  };
+  double step_on = 0, step_off = 0;
+  const double on = head_error(true, &step_on), off = head_error(false, &step_off);
+  MESSAGE("mean horizontal head error: anchored " << on << " m, free " << off << " m");
+  CHECK(on < 0.75 * off);  // (a small random-weight network here: it strays metres; the default weights stray cm)
+  CHECK(step_on < step_off + 0.03 + 1e-9);  // the anchor moves the body by at most anchor_max_step per step
+}
 
 TEST_CASE("n3p pipeline: without IK it reproduces the PyTorch reference, controller flags -> modes") {
   const auto& g = golden();

@@ -76,6 +76,10 @@ struct N3PConfig {
   // 11 validation clips (offdist --every 30): gain 0 / 0.1 / 0.3 / 1 give MPJPE 4.78 / 4.69 / 4.59 /
   // 6.16 cm and head error 3.94 / 3.58 / 3.11 / 2.35 cm; 1 moves the free feet with every correction.
   double anchor_gain = 0.3;
+  // At most this far per step (m, standard scale: 0.9 m/s at 30 Hz): a large error (a lost or jumped
+  // headset) is left to the sanitizer's reset instead of dragging the body (and the physics mode's
+  // reference) across the room in a few frames.
+  double anchor_max_step = 0.03;
   trackers::SanitizerConfig sanitizer{};
   features::DeviceModel devices{};                // device -> joint offsets (DeviceModel::none(): trackers at the joints)
   features::AutoCalibrationConfig calibration{};  // the standing-window search (enabled by default)
@@ -190,7 +194,9 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
     if (cfg_.anchor_head && head_ >= 0) {
       const Eigen::Vector3d d = o[0].p - out_.world().position[head_];
-      const Eigen::Vector3d shift = cfg_.anchor_gain * Eigen::Vector3d(d.x(), 0.0, d.z());
+      Eigen::Vector3d shift = cfg_.anchor_gain * Eigen::Vector3d(d.x(), 0.0, d.z());
+      if (shift.norm() > cfg_.anchor_max_step) shift *= cfg_.anchor_max_step / shift.norm();
+      if (!shift.allFinite()) shift.setZero();
       pred_.shift(shift.x(), shift.z());
       out_.pose().root_position += shift;
       for (auto& p : out_.world().position) p += shift;
