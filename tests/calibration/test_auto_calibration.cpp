@@ -242,3 +242,36 @@ TEST_CASE("LoBSTr pipeline: automatic by default, the calibration change restart
   }
   CHECK(p.calibration_report().status == features::CalibrationStatus::Calibrated);
 }
+
+TEST_CASE("LoBSTr pipeline: a calibration that barely changes the size keeps the feet where they are on the floor") {
+  using P = avatar::LoBSTrPipeline<float, 256, 128>;
+  static auto w = P::load(std::string(SPARSEBODY_SOURCE_DIR) + "/examples/weights/lobstr_compact.weights.json");
+  // eye 1.50 m: s = 1.378 / 1.42 = 0.97 against the default body's 1 (a refinement-sized change)
+  for (double eye : {1.50, 1.80}) {
+    INFO("eye height " << eye);
+    P p(w);
+    const auto s = sparsebody_test::session({{Phase::Stand, 3.0, eye}, {Phase::Walk, 1.0, eye}});
+    const int toe[2] = {p.joint_map()[pose::Role::ToeL], p.joint_map()[pose::Role::ToeR]};
+    Eigen::Vector3d prev[2];
+    bool have = false, changed = false;
+    double jump = 0;
+    for (const auto& f : s) {
+      const auto before = p.calibration_report().status;
+      p.push(f);
+      if (!p.has_output()) continue;
+      Eigen::Vector3d now[2];
+      for (int k = 0; k < 2; ++k) now[k] = p.world().position[toe[k]] * p.user_scale();
+      if (have && before != p.calibration_report().status) {
+        changed = true;
+        for (int k = 0; k < 2; ++k) jump = std::max(jump, std::hypot(now[k].x() - prev[k].x(), now[k].z() - prev[k].z()));
+      }
+      for (int k = 0; k < 2; ++k) prev[k] = now[k];
+      have = true;
+      REQUIRE(p.world().position[toe[0]].allFinite());
+    }
+    REQUIRE(changed);
+    MESSAGE("toe jump on the calibration frame: " << jump << " m (user scale " << p.user_scale() << ")");
+    // within 5 %: the locks move with the rescaled world (no jump); 20 %: everything restarts
+    if (eye < 1.6) CHECK(jump < 0.01);
+  }
+}

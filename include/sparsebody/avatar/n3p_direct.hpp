@@ -173,10 +173,21 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     std::array<bool, trackers::kTrackerCount> measured{s.measured[0], false, false, false};
     dev[0] = s.pose[0];
     for (int k = 1; k < 3; ++k) measured[k] = controller(f, k, s.pose[0].position, dev[k]);
-    if (auto_.push(f.time, dev, measured)) {  // a new calibration: restart the predictor
+    if (auto_.push(f.time, dev, measured)) {  // a new calibration found while running
+      const double k = auto_.calibration().scale / calib_.base.scale;
       calib_ = features::n3p::N3PCalibration{};
       calib_.base = auto_.calibration();
-      reset_state();
+      // A refinement (the size within 5 %): the predictor carries on in the rescaled world (its
+      // heading frame's ground position x k; the body in that frame is in the standard scale
+      // already) and the foot pins move with it, so the avatar does not jump. A larger change
+      // restarts the predictor under the headset (its state described another body).
+      if (std::abs(k - 1.0) > 0.05) {
+        reset_state();
+      } else {
+        pred_.rescale_ground(k);
+        lock_[0].rescale(k);
+        lock_[1].rescale(k);
+      }
       ++calibration_changes_;
     }
     features::n3p::TrackerSet o;

@@ -17,6 +17,7 @@
 // do not creep while the user stands; the pipeline clears it on the first moving frame.
 #pragma once
 #include <cmath>
+#include <initializer_list>
 
 #include <Eigen/Core>
 
@@ -30,6 +31,11 @@ class FootLock {
   explicit FootLock(int blend_frames = 10, Rearm rearm = Rearm::SameFrame) : n_(blend_frames), rearm_(rearm) {}
   void reset() noexcept { state_ = State::Free; hold_off_ = false; hold_ = false; }
   void hold(bool h) noexcept { hold_ = h; }
+  // The world's scale changed by k (a new calibration: positions are in the standard skeleton's
+  // scale): the lock moves with the ground (x and z x k); heights are the body's, kept.
+  void rescale(double k) noexcept {
+    for (Eigen::Vector3d* p : {&lock_, &from_, &current_}) p->x() *= k, p->z() *= k;
+  }
   State state() const noexcept { return state_; }
 
   // One frame: contact state, the predicted joint (toe) position, the hip position and the leg's

@@ -183,6 +183,15 @@ class N3PPredictor {
     pose_.root_position += Eigen::Vector3d(dx, 0.0, dz);
   }
 
+  // The world's standard scale changed by k (a new calibration): the heading frame's ground
+  // position follows (what is expressed in h, the body, stays).
+  void rescale_ground(double k) noexcept {
+    h_.px *= k;
+    h_.pz *= k;
+    pose_.root_position.x() *= k;
+    pose_.root_position.z() *= k;
+  }
+
   // --- results (valid after a successful step) ----------------------------------------------
   const pose::BodyPose& pose() const noexcept { return pose_; }          // standard skeleton, metres
   const Eigen::Matrix3d& world_rotation(int joint) const noexcept { return R_[joint]; }

@@ -26,6 +26,8 @@ class Stillness {
   explicit Stillness(StillnessConfig c = {}) : cfg_(c) {}
   void reset() noexcept { have_ = false; still_ = false; calm_ = 0; speed_ = yaw_rate_ = 0; }
   bool still() const noexcept { return still_; }
+  // Positions given in a scale that changed by k (a new calibration): keep the history consistent.
+  void rescale(double k) noexcept { p_.x() *= k, p_.z() *= k; }
   double speed() const noexcept { return speed_; }
   double yaw_rate() const noexcept { return yaw_rate_; }
 
