@@ -181,7 +181,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       // heading frame's ground position x k; the body in that frame is in the standard scale
       // already) and the foot pins move with it, so the avatar does not jump. A larger change
       // restarts the predictor under the headset (its state described another body).
-      if (std::abs(k - 1.0) > 0.05) {
+      if (!features::refines_size(k)) {
         reset_state();
       } else {
         pred_.rescale_ground(k);

@@ -29,6 +29,10 @@ namespace sparsebody::features {
 
 enum class ScaleFrom { Head, Pelvis };
 
+// Whether a new calibration whose scale is k times the old one is a refinement of the same body
+// (within 5 %): the pipelines then carry their state over, rescaled, instead of restarting.
+inline bool refines_size(double k) noexcept { return std::abs(k - 1.0) <= 0.05; }
+
 struct Calibration {
   std::array<Eigen::Quaterniond, trackers::kTrackerCount> offset{
       Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity(),
