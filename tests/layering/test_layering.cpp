@@ -35,6 +35,7 @@ const std::map<std::string, int>& layer_rank() {
       {"control", 10},  // controllers, policies' inputs, fall detection
       {"avatar", 11},   // the pipelines: trackers in, a body out
       {"recordings", 12},  // BVH clips, tracker CSV sessions, tracker synthesis (files, training data)
+      {"training", 13},    // training environments (reference motions, rewards) for the Python trainers
   };
   return r;
 }

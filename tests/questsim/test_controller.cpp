@@ -85,12 +85,12 @@ TEST_CASE("QuestSim: 36 Hz control, 2 substeps, and the latency of the 6 future 
   CHECK(double(c.window()[0][0].position.x()) == doctest::Approx(fr.pose[0].position.x).epsilon(1e-5));
   const auto fn = user_frame(c.newest_time());
   CHECK(double(c.window()[6][1].position.z()) == doctest::Approx(fn.pose[1].position.z).epsilon(1e-5));
-  // Torques: 200 N m times the policy output on every non-root DoF, none on the root.
+  // Torques: the joint's limit times the policy output on every non-root DoF, none on the root.
   const auto& tau = c.torques();
   for (int k = 0; k < 6; ++k) CHECK(tau(k) == 0.f);
   bool nonzero = false;
   for (int k = 0; k < Ctl::kActionSize; ++k) {
-    CHECK(tau(6 + k) == doctest::Approx(200.f * c.action()[k]));
+    CHECK(tau(6 + k) == doctest::Approx(c.torque_limits()(6 + k) * c.action()[k]));
     nonzero = nonzero || c.action()[k] != 0.f;
   }
   CHECK(nonzero);
@@ -222,4 +222,24 @@ TEST_CASE("QuestSim: 20 s of random-weight control on a moving user, float and d
   run(cf);
   CtlD cd(questsim_test::policy_weights<CtlD>(), 1.62);
   run(cd);
+}
+
+TEST_CASE("QuestSim torque limits: per joint by default, scaled with the avatar; the paper's 200 N m on request") {
+  Ctl c(questsim_test::policy_weights<Ctl>(), 1.75);
+  const auto& m = c.simulator().model();
+  const auto& lim = c.torque_limits();
+  for (int k = 0; k < 6; ++k) CHECK(lim(k) == 0.f);
+  const auto at = [&](const char* body) { return lim(m.bodies[m.find(body)].v_index); };
+  CHECK(at("UpperLeg_L") == doctest::Approx(200.0).epsilon(0.01));  // 1.75 m, 63 kg: the table's values
+  CHECK(at("LowerLeg_R") == doctest::Approx(150.0).epsilon(0.01));
+  CHECK(at("Hand_L") == doctest::Approx(10.0).epsilon(0.01));
+  CHECK(at("Toes_R") == doctest::Approx(10.0).epsilon(0.01));
+  // A taller avatar (mass x h^3 at constant density) gets limits x (h / 1.75)^4.
+  Ctl tall(questsim_test::policy_weights<Ctl>(), 1.95);
+  const auto& mt = tall.simulator().model();
+  CHECK(tall.torque_limits()(mt.bodies[mt.find("UpperLeg_L")].v_index) == doctest::Approx(200.0 * std::pow(1.95 / 1.75, 4)).epsilon(0.01));
+  QuestSimConfig paper;
+  paper.per_joint_torque_limits = false;
+  Ctl p(questsim_test::policy_weights<Ctl>(), 1.62, paper);
+  for (int k = 6; k < p.simulator().model().nv; ++k) CHECK(p.torque_limits()(k) == 200.f);
 }

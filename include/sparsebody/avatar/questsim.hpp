@@ -4,7 +4,8 @@
 //   TrackerFrame (any rate) -> Resampler (36 Hz) -> TrackerSanitizer (bad input)
 //     -> window of sensor frames t .. t+NF (a shift register, NF = 6)
 //     -> observation o (questsim_observation.hpp) -> policy pi: MLP [400, 300, 200], tanh
-//     -> a in [-1, 1]^NJ, tau = 200 N m * a on every non-root DoF (direct torques, no PD)
+//     -> a in [-1, 1]^NJ, tau_j = tau_max,j * a_j on every non-root DoF (direct torques, no PD;
+//        control/questsim_actuation.hpp: per-joint limits, or the paper's 200 N m everywhere)
 //     -> 2 simulation substeps of 1/72 s (Simulator in ControlMode::Torque).
 //
 // Latency (§3.5): the policy acting for user time t observes frames up to t + NF, so it can only run
@@ -68,6 +69,7 @@
 #include "sparsebody/avatar/questsim_event.hpp"
 #include "sparsebody/character/avatar.hpp"
 #include "sparsebody/control/fall_detector.hpp"
+#include "sparsebody/control/questsim_actuation.hpp"
 #include "sparsebody/control/questsim_observation.hpp"
 #include "sparsebody/features/calibration_report.hpp"
 #include "sparsebody/features/heading_frame.hpp"
@@ -136,6 +138,8 @@ class QuestSimPipeline {
     fall_ = control::FallDetector<S>(fall_detector_config(cfg, standing_q_(1)));
     zero_v_ = Sim::VecV::Zero(model.nv);
     tau_ = zero_v_;
+    tau_max_ = control::questsim_torque_limits(model, user_height / character::AvatarOptions{}.height,
+                                               cfg.per_joint_torque_limits ? 0.0 : cfg.torque_scale);
     sim_->torques().setZero();
     obs_.fill(0.f);
     action_.fill(0.f);
@@ -202,7 +206,7 @@ class QuestSimPipeline {
       ++rejected_actions_;
     }
     // tau = 200 N m * a on the non-root DoFs; the root is unactuated (no residual forces).
-    for (int k = 0; k < NJ; ++k) tau_(6 + k) = S(cfg_.torque_scale) * S(action_[k]);
+    for (int k = 0; k < NJ; ++k) tau_(6 + k) = tau_max_(6 + k) * S(action_[k]);
     sim_->torques() = tau_;
     last_sim_status_ = dynamics::StepStatus::Ok;
     for (int s = 0; s < cfg_.substeps; ++s) {
@@ -261,6 +265,7 @@ class QuestSimPipeline {
   const std::array<float, kObservationSize>& observation() const noexcept { return obs_; }
   const std::array<float, NJ>& action() const noexcept { return action_; }  // policy output in [-1, 1]
   const typename Sim::VecV& torques() const noexcept { return tau_; }       // applied (N m), root entries 0
+  const typename Sim::VecV& torque_limits() const noexcept { return tau_max_; }  // tau_max per DoF (N m)
   const Window& window() const noexcept { return window_; }
   const Builder& observation_builder() const noexcept { return obs_builder_; }
   const nn::Network<Net>& policy() const noexcept { return policy_; }
@@ -297,7 +302,7 @@ class QuestSimPipeline {
   alignas(64) std::array<float, kObservationSize> obs_{};
   std::array<float, NJ> action_{};
   typename Sim::VecQ standing_q_;
-  typename Sim::VecV zero_v_, tau_;
+  typename Sim::VecV zero_v_, tau_, tau_max_;
   control::FallDetector<S> fall_;
   bool started_ = false;
   QuestSimEvent last_event_ = QuestSimEvent::Waiting;

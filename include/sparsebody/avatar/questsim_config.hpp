@@ -12,7 +12,11 @@ namespace sparsebody::avatar {
 struct QuestSimConfig {
   double control_rate = 36.0;      // Hz: policy rate (Appendix A: 1/36 s)
   int substeps = 2;                // simulation substeps per control step (Appendix A)
-  double torque_scale = 200.0;     // N m per unit of policy output (Appendix A: [-1, 1] -> [-200, 200])
+  // Action -> torque (control/questsim_actuation.hpp): per-joint limits (DeepMimic's proportions,
+  // scaled with the avatar), or with per_joint_torque_limits = false the paper's torque_scale on
+  // every DoF (Appendix A: [-1, 1] -> [-200, 200] N m).
+  bool per_joint_torque_limits = true;
+  double torque_scale = 200.0;     // N m per unit of policy output when !per_joint_torque_limits
   double joint_damping = 0.1;      // passive joint damping, N m s/rad (Appendix A: "friction of 0.1")
   double eye_height_ratio = 0.936; // standing headset height / stature
   double min_height = 1.0, max_height = 2.4;  // heights accepted by user_height_from_headset (m)

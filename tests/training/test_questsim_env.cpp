@@ -1,0 +1,225 @@
+// QuestSim training environment (training/questsim_env.hpp) on a synthetic clip of the standard
+// skeleton (arms raised and lowered while standing): reference-state initialisation puts the
+// retargeted reference on the floor under the headset, the same seed gives the same bits whatever the
+// thread count, the residual force keeps a character up that falls without it, step() never
+// allocates, and the action mapping is the run-time pipeline's.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstring>
+
+#include "sparsebody/avatar/questsim.hpp"
+#include "sparsebody/predict/n3p_predictor.hpp"
+#include "sparsebody/training/questsim_env.hpp"
+#include "support/alloc_counter.hpp"
+
+using namespace sparsebody;
+using Env = training::QuestSimEnv<6>;
+
+namespace {
+
+const predict::N3PMeta& meta() {
+  static const predict::N3PMeta m = [] {
+    using Lo = predict::N3PPredictor<float>::LoNet;
+    return predict::N3PMeta::from(
+        nn::NetworkWeights<Lo>::load(std::string(SPARSEBODY_SOURCE_DIR) + "/examples/weights/n3p_lower.json",
+                                     networks::kN3PLowerKind)->info());
+  }();
+  return m;
+}
+
+// 4 s at 30 fps of the standard skeleton standing (the Neural3Points standing pose: its joint
+// frames are the capture's, bones along local X, so the rest pose is not upright), both arms swinging
+// about their local Z axis, written as a BVH would be (ZXY Euler channels, root in metres).
+recordings::BvhClip synthetic_clip() {
+  recordings::BvhClip c;
+  c.skeleton = meta().skeleton;
+  const int n = c.skeleton.size();
+  c.end_site.assign(n, 0);
+  c.end_offset.assign(n, Eigen::Vector3d::Zero());
+  using Ch = recordings::BvhChannel;
+  for (int j = 0; j < n; ++j) {
+    if (j == 0) c.channels.push_back({Ch::Xposition, Ch::Yposition, Ch::Zposition, Ch::Zrotation, Ch::Xrotation, Ch::Yrotation});
+    else c.channels.push_back({Ch::Zrotation, Ch::Xrotation, Ch::Yrotation});
+    c.channel_count += static_cast<int>(c.channels.back().size());
+  }
+  c.frame_time = 1.0 / 30;
+  c.frames = 120;
+  const auto W = control::N3PSimRetarget<double, 24, 72>::neutral_rotations(meta());
+  const int sl = c.skeleton.find("UpperArm_L"), sr = c.skeleton.find("UpperArm_R");
+  REQUIRE(sl > 0);
+  REQUIRE(sr > 0);
+  for (int f = 0; f < c.frames; ++f) {
+    std::vector<double> row;
+    const double a = 0.5 * std::sin(2 * M_PI * f / 60.0);
+    for (int j = 0; j < n; ++j) {
+      const int p = c.skeleton.parents[j];
+      Eigen::Matrix3d L = p < 0 ? W[j] : Eigen::Matrix3d(W[p].transpose() * W[j]);
+      if (j == sl || j == sr) L = L * Eigen::AngleAxisd(j == sl ? a : -a, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      if (p < 0) row.insert(row.end(), {0.0, meta().standing_hips_height, 0.002 * f});  // creeping forwards
+      const Eigen::Vector3d e = L.eulerAngles(2, 0, 1) * (180.0 / M_PI);  // L = Rz Rx Ry
+      row.insert(row.end(), {e(0), e(1), e(2)});
+    }
+    c.motion.insert(c.motion.end(), row.begin(), row.end());
+  }
+  return c;
+}
+
+std::shared_ptr<const std::vector<training::QuestSimReference>> clips() {
+  static auto c = [] {
+    auto v = std::make_shared<std::vector<training::QuestSimReference>>();
+    v->push_back(training::make_questsim_reference(synthetic_clip(), meta().skeleton, "synthetic"));
+    return v;
+  }();
+  return c;
+}
+
+std::vector<float> random_actions(int n, unsigned seed, float scale) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> g(0.f, scale);
+  std::vector<float> a(static_cast<std::size_t>(n) * Env::kActionSize);
+  for (float& x : a) x = g(rng);
+  return a;
+}
+
+}  // namespace
+
+TEST_CASE("QuestSim reference: 36 Hz frames of the clip, the devices where a headset session would have them") {
+  const auto& r = clips()->front();
+  CHECK(r.frames() == doctest::Approx(36 * (119 / 30.0)).epsilon(0.02));
+  for (const auto& s : r.sensor) {
+    CHECK(s[0].position.y() > 1.3);          // headset at eye height
+    CHECK(s[0].position.y() < 1.8);
+    CHECK(std::abs(s[0].rotation.determinant() - 1.0) < 1e-9);
+  }
+}
+
+TEST_CASE("QuestSim env: reference-state initialisation stands the avatar on the floor under the headset") {
+  Env env(clips(), meta(), std::vector<double>(8, 1.75), 11);
+  for (int i = 0; i < env.size(); ++i) {
+    const auto& d = env.simulator(i).data();
+    const auto& m = env.model(i);
+    double lowest = 1e9;
+    for (int b = 0; b < m.nb; ++b) lowest = std::min(lowest, double(d.p[b].y()));
+    CHECK(lowest > -0.01);
+    CHECK(lowest < 0.15);  // ankles / toes near the floor
+    const int head = m.find("Head");
+    const Eigen::Vector3d hs = env.sensor(i)[0].position;
+    CHECK((d.p[head].cast<double>() - hs).norm() < 0.3);  // headset ~10 cm in front of / above the head joint
+    const float* o = env.observations() + std::size_t(i) * Env::kObservationSize;
+    for (int k = 0; k < Env::kObservationSize; ++k) REQUIRE(std::isfinite(o[k]));
+    CHECK(o[Env::kObservationSize - 1] == doctest::Approx(1.75));  // o_user,scale
+  }
+}
+
+TEST_CASE("QuestSim env: the same seed gives the same bits with 1 or 2 threads, and a new seed differs") {
+  Env a(clips(), meta(), std::vector<double>(6, 1.75), 5), b(clips(), meta(), std::vector<double>(6, 1.75), 5);
+  Env c(clips(), meta(), std::vector<double>(6, 1.75), 6);
+  bool differs = false;
+  for (int t = 0; t < 60; ++t) {
+    const auto act = random_actions(6, 100 + t, 0.05f);
+    a.step(act.data(), 1);
+    b.step(act.data(), 2);
+    c.step(act.data(), 1);
+    REQUIRE(std::memcmp(a.observations(), b.observations(), sizeof(float) * 6 * Env::kObservationSize) == 0);
+    REQUIRE(std::memcmp(a.rewards(), b.rewards(), sizeof(float) * 6) == 0);
+    REQUIRE(std::memcmp(a.terminated(), b.terminated(), 6) == 0);
+    differs = differs || std::memcmp(a.observations(), c.observations(), sizeof(float) * 6 * Env::kObservationSize) != 0;
+  }
+  CHECK(differs);
+}
+
+TEST_CASE("QuestSim env: rewards in [0, 1]; zero torques fall, the residual root force keeps them up") {
+  auto falls = [](double residual) {
+    training::QuestSimEnvConfig cfg;
+    cfg.residual_max_force = residual;
+    cfg.residual_max_torque = residual / 3;
+    cfg.max_head_error = 10;  // only falls end an episode here
+    Env env(clips(), meta(), std::vector<double>(4, 1.75), 3, cfg);
+    const std::vector<float> zero(std::size_t(4) * Env::kActionSize, 0.f);
+    int n = 0;
+    for (int t = 0; t < 72; ++t) {
+      env.step(zero.data());
+      for (int i = 0; i < 4; ++i) {
+        CHECK(env.rewards()[i] >= 0.f);
+        CHECK(env.rewards()[i] <= 1.f);
+        n += env.terminated()[i] == 2;
+      }
+    }
+    return n;
+  };
+  const int without = falls(0), with = falls(600);
+  MESSAGE("falls in 2 s x 4 characters: " << without << " without, " << with << " with a 600 N residual");
+  CHECK(without >= 4);
+  CHECK(with * 4 <= without);  // the residual holds most of them up
+}
+
+TEST_CASE("QuestSim env: non-finite actions are zero torques, never a non-finite observation") {
+  Env env(clips(), meta(), std::vector<double>(2, 1.75), 1);
+  std::vector<float> act(std::size_t(2) * Env::kActionSize, std::nanf(""));
+  act[3] = std::numeric_limits<float>::infinity();
+  for (int t = 0; t < 20; ++t) {
+    env.step(act.data());
+    for (int k = 0; k < 2 * Env::kObservationSize; ++k) REQUIRE(std::isfinite(env.observations()[k]));
+    REQUIRE(std::isfinite(env.rewards()[0]));
+  }
+}
+
+TEST_CASE("QuestSim env: the action mapping is the run-time pipeline's (same torque limits)") {
+  Env env(clips(), meta(), {1.62}, 1);
+  const auto lim = control::questsim_torque_limits(env.model(0), 1.62 / 1.75);
+  const auto pipe = control::questsim_torque_limits(character::avatar_for_user_height<float, 24, 72>(1.62), 1.62 / 1.75);
+  CHECK((lim - pipe).cwiseAbs().maxCoeff() == 0.f);
+  CHECK(lim(6) > 0.f);
+}
+
+TEST_CASE("QuestSim env: step() with one thread never allocates (resets included)") {
+  Env env(clips(), meta(), std::vector<double>(4, 1.75), 2);
+  const auto act = random_actions(4, 9, 0.05f);
+  for (int t = 0; t < 5; ++t) env.step(act.data());
+  long long n = 0;
+  int ended = 0;
+  {
+    sparsebody_test::AllocationCounter counter;
+    for (int t = 0; t < 200; ++t) {
+      env.step(act.data());
+      for (int i = 0; i < 4; ++i) ended += env.terminated()[i] || env.truncated()[i];
+    }
+    n = counter.count();
+  }
+  CHECK(ended > 0);  // restarts were exercised
+  CHECK(n == 0);
+}
+
+TEST_CASE("QuestSim reward: 1 for a perfect match; one joint off by d gives exp(-k d^2 / joints)") {
+  using Model = dynamics::Model<float, 24, 72>;
+  const Model m = character::avatar_for_user_height<float, 24, 72>(1.75);
+  Model::VecQ q = m.neutral_configuration();
+  Model::VecV v = Model::VecV::Zero(m.nv);
+  dynamics::Data<float, 24, 72> a(m), b(m);
+  dynamics::forward_kinematics(m, a, q, &v);
+  dynamics::forward_kinematics(m, b, q, &v);
+  training::QuestSimRewardConfig cfg;
+  auto r = training::questsim_reward(m, a, q, v, b, q, v, {600, 0}, {600, 0}, cfg);
+  for (int k = 0; k < 5; ++k) CHECK(r.r[k] == doctest::Approx(1.0));
+  CHECK(r.total == doctest::Approx(1.0));
+  // Turn one ball joint (the Head's) by d about X: only r(q) changes before kinematics are redone.
+  const int head = m.find("Head");
+  const double d = 0.2;
+  Model::VecQ q2 = q;
+  const int k0 = m.bodies[head].q_index;
+  q2(k0) = float(std::cos(d / 2)); q2(k0 + 1) = float(std::sin(d / 2)); q2(k0 + 2) = 0; q2(k0 + 3) = 0;
+  int joints = 0;
+  for (int i = 0; i < m.nb; ++i) joints += m.bodies[i].joint != dynamics::JointType::Free;
+  r = training::questsim_reward(m, a, q2, v, b, q, v, {600, 0}, {600, 0}, cfg);
+  CHECK(r.r[0] == doctest::Approx(std::exp(-40.0 * d * d / joints)).epsilon(1e-4));
+  cfg.mean_over_joints = false;
+  r = training::questsim_reward(m, a, q2, v, b, q, v, {600, 0}, {600, 0}, cfg);
+  CHECK(r.r[0] == doctest::Approx(std::exp(-40.0 * d * d)).epsilon(1e-4));
+  // A foot unloading by 200 N: r_f = exp(-0.01 * 200).
+  r = training::questsim_reward(m, a, q, v, b, q, v, {600, 300}, {400, 300}, cfg);
+  CHECK(r.r[4] == doctest::Approx(std::exp(-2.0)));
+  // Loading a foot is not penalised.
+  r = training::questsim_reward(m, a, q, v, b, q, v, {400, 300}, {600, 300}, cfg);
+  CHECK(r.r[4] == doctest::Approx(1.0));
+}

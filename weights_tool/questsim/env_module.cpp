@@ -1,0 +1,134 @@
+// Python binding of the QuestSim training environment (include/sparsebody/training/questsim_env.hpp).
+// Observations, rewards and flags are numpy views of the environment's own buffers (zero copy, valid
+// while the Env lives; step() overwrites them in place); actions are read in place from a C-contiguous
+// float32 array. step() releases the GIL.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sparsebody/predict/n3p_predictor.hpp"
+#include "sparsebody/training/questsim_env.hpp"
+
+namespace py = pybind11;
+using namespace sparsebody;
+using Env = training::QuestSimEnv<6>;
+
+namespace {
+
+struct Clips {
+  std::shared_ptr<std::vector<training::QuestSimReference>> clips = std::make_shared<std::vector<training::QuestSimReference>>();
+  predict::N3PMeta meta;
+};
+
+// The standard skeleton and standing heights come from the Neural3Points lower-body weights' meta
+// (the same retarget the physics pipeline uses).
+std::shared_ptr<Clips> load_clips(const std::vector<std::string>& paths, const std::string& n3p_lower) {
+  using Lo = predict::N3PPredictor<float>::LoNet;
+  auto c = std::make_shared<Clips>();
+  c->meta = predict::N3PMeta::from(nn::NetworkWeights<Lo>::load(n3p_lower, networks::kN3PLowerKind)->info());
+  {
+    py::gil_scoped_release nogil;
+    for (const auto& p : paths) c->clips->push_back(training::read_questsim_reference(p, c->meta.skeleton));
+  }
+  return c;
+}
+
+template <class T>
+py::array view(py::object owner, T* data, std::vector<py::ssize_t> shape) {
+  return py::array_t<T>(shape, data, owner);
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_questsim_env, m) {
+  m.doc() = "sparsebody QuestSim training environment (batched, C++)";
+  py::class_<Clips, std::shared_ptr<Clips>>(m, "Clips")
+      .def("__len__", [](const Clips& c) { return c.clips->size(); })
+      .def("frames", [](const Clips& c, int i) { return c.clips->at(std::size_t(i)).frames(); })
+      .def("source", [](const Clips& c, int i) { return c.clips->at(std::size_t(i)).source; });
+  m.def("load_clips", &load_clips, py::arg("paths"), py::arg("n3p_lower"),
+        "BVH clips -> reference motions at 36 Hz (poses and device-stream sensors)");
+
+  py::class_<training::QuestSimEnvConfig>(m, "Config")
+      .def(py::init<>())
+      .def_readwrite("max_head_error", &training::QuestSimEnvConfig::max_head_error)
+      .def_readwrite("max_episode_steps", &training::QuestSimEnvConfig::max_episode_steps)
+      .def_readwrite("residual_max_force", &training::QuestSimEnvConfig::residual_max_force)
+      .def_readwrite("residual_max_torque", &training::QuestSimEnvConfig::residual_max_torque)
+      .def_property("reward_mean_over_joints", [](const training::QuestSimEnvConfig& c) { return c.reward.mean_over_joints; },
+                    [](training::QuestSimEnvConfig& c, bool b) { c.reward.mean_over_joints = b; })
+      .def_property("reward_w", [](const training::QuestSimEnvConfig& c) { return c.reward.w; },
+                    [](training::QuestSimEnvConfig& c, std::array<double, 5> w) { c.reward.w = w; })
+      .def_property("reward_k", [](const training::QuestSimEnvConfig& c) { return c.reward.k; },
+                    [](training::QuestSimEnvConfig& c, std::array<double, 5> k) { c.reward.k = k; });
+
+  py::class_<Env>(m, "Env")
+      .def(py::init([](std::shared_ptr<Clips> c, const std::vector<double>& heights, unsigned long long seed,
+                       training::QuestSimEnvConfig cfg) { return std::make_unique<Env>(c->clips, c->meta, heights, seed, cfg); }),
+           py::arg("clips"), py::arg("heights"), py::arg("seed") = 0, py::arg("config") = training::QuestSimEnvConfig{})
+      .def_property_readonly_static("obs_size", [](py::object) { return Env::kObservationSize; })
+      .def_property_readonly_static("action_size", [](py::object) { return Env::kActionSize; })
+      .def("__len__", &Env::size)
+      .def_property_readonly("obs", [](py::object self) {
+        Env& e = self.cast<Env&>();
+        return view(self, e.observations(), {e.size(), Env::kObservationSize});
+      })
+      .def_property_readonly("final_obs", [](py::object self) {
+        Env& e = self.cast<Env&>();
+        return view(self, const_cast<float*>(e.final_observations()), {e.size(), Env::kObservationSize});
+      })
+      .def_property_readonly("reward", [](py::object self) {
+        Env& e = self.cast<Env&>();
+        return view(self, const_cast<float*>(e.rewards()), {e.size()});
+      })
+      .def_property_readonly("reward_terms", [](py::object self) {
+        Env& e = self.cast<Env&>();
+        return view(self, const_cast<float*>(e.reward_terms()), {e.size(), 5});
+      })
+      .def_property_readonly("terminated", [](py::object self) {
+        Env& e = self.cast<Env&>();
+        return view(self, const_cast<unsigned char*>(e.terminated()), {e.size()});
+      })
+      .def_property_readonly("truncated", [](py::object self) {
+        Env& e = self.cast<Env&>();
+        return view(self, const_cast<unsigned char*>(e.truncated()), {e.size()});
+      })
+      .def("step", [](Env& e, py::array_t<float, py::array::c_style> a, int threads) {
+        if (a.ndim() != 2 || a.shape(0) != e.size() || a.shape(1) != Env::kActionSize)
+          throw py::value_error("actions: expected float32 [" + std::to_string(e.size()) + ", " +
+                                std::to_string(Env::kActionSize) + "]");
+        const float* p = a.data();
+        py::gil_scoped_release nogil;
+        e.step(p, threads);
+      }, py::arg("actions"), py::arg("threads") = 1)
+      .def("reset_all", &Env::reset_all)
+      .def("set_residual", &Env::set_residual, py::arg("max_force"), py::arg("max_torque"))
+      .def("clip", &Env::clip)
+      .def("frame", &Env::frame)
+      .def("episode_step", &Env::episode_step)
+      .def("residual_force", &Env::root_residual_force)
+      .def("sensor_positions", [](const Env& e, int i) {
+        py::array_t<double> out({3, 3});
+        auto r = out.mutable_unchecked<2>();
+        for (int d = 0; d < 3; ++d)
+          for (int k = 0; k < 3; ++k) r(d, k) = e.sensor(i)[d].position(k);
+        return out;
+      })
+      .def("body_names", [](const Env& e) {
+        std::vector<std::string> n;
+        for (int b = 0; b < e.model(0).nb; ++b) n.push_back(e.model(0).names[b]);
+        return n;
+      })
+      .def("body_positions", [](const Env& e, int i) {
+        const auto& d = e.simulator(i).data();
+        py::array_t<double> out({e.model(i).nb, 3});
+        auto r = out.mutable_unchecked<2>();
+        for (int b = 0; b < e.model(i).nb; ++b)
+          for (int k = 0; k < 3; ++k) r(b, k) = double(d.p[b](k));
+        return out;
+      });
+}

@@ -1,0 +1,283 @@
+"""PPO training of the QuestSim torque policy on this machine's CPUs (Winkler et al. 2022, §3.7,
+Appendix A), in the batched C++ environment (weights_tool/questsim/env.py -> questsim_env.hpp).
+
+  nice -n 10 /usr/bin/python3 -m weights_tool.questsim.train TRAIN_DIR --out OUT [--resume]
+
+What follows the paper: policy and value MLPs [400, 300, 200] tanh (the policy's output tanh too, as
+the run-time network: a in [-1, 1] -> 200 N m), the imitation reward with its weights and kernels,
+5 epochs over 4 minibatches per update, reference-state initialisation. What a 2-core CPU forces:
+a few hundred characters instead of 4000, the motions headset users make (--motions, default the
+standing gestures and walks of the training split), and optionally a residual root force that
+helps the character stay up early and is annealed to zero (--residual-force N over
+--residual-anneal samples); the shipped policy is measured with it off.
+Exploration noise: a learned state-independent log std, started at --init-std (the paper's fixed
+0.03 needs its 14 billion steps).
+Everything is resumable: OUT/checkpoint.pt (policy, value, optimiser, observation statistics,
+iteration, random state), OUT/curve.csv (one row per update), OUT/curve.png, and the policy in the
+library's format OUT/questsim_policy.json (kind "questsim_policy", normalisation = the running
+observation statistics) written with every checkpoint.
+"""
+import argparse
+import csv
+import glob
+import math
+import os
+import re
+import time
+
+import numpy as np
+import torch
+import torch.nn as tnn
+
+from .. import nets
+from ..format import write_weights
+from .env import ROOT, load_module
+from .policy import HIDDEN
+
+DEFAULT_MOTIONS = r"raise-up|wave|bye|bow|guide|call|respond|walk"
+CREDIT = ("Trained on the Bandai-Namco-Research-Motiondataset (CC BY-NC-ND 4.0, Bandai Namco "
+          "Research Inc.): non-commercial use only.")
+
+
+class RunningStats:
+    """Per-feature mean / variance over every observation seen (Chan et al. parallel update)."""
+
+    def __init__(self, n):
+        self.n, self.mean, self.m2 = 0, np.zeros(n), np.zeros(n)
+
+    def update(self, x):
+        x = np.asarray(x, np.float64).reshape(-1, self.mean.size)
+        nb, mb = x.shape[0], x.mean(0)
+        m2b = ((x - mb) ** 2).sum(0)
+        d, tot = mb - self.mean, self.n + nb
+        self.mean = self.mean + d * nb / tot
+        self.m2 = self.m2 + m2b + d * d * self.n * nb / tot
+        self.n = tot
+
+    def std(self, floor):
+        return np.maximum(np.sqrt(self.m2 / max(self.n - 1, 1)), floor)
+
+    def state(self):
+        return {"n": self.n, "mean": self.mean, "m2": self.m2}
+
+    def load(self, s):
+        self.n, self.mean, self.m2 = s["n"], s["mean"], s["m2"]
+
+
+class ActorCritic(tnn.Module):
+    def __init__(self, n_obs, n_act, init_std):
+        super().__init__()
+        self.actor = nets.MLPPolicy([n_obs, *HIDDEN, n_act], "tanh", "tanh", "questsim_policy")
+        self.critic = nets.MLPPolicy([n_obs, *HIDDEN, 1], "tanh", "identity", "value")
+        with torch.no_grad():  # small first actions (a few N m), as PPO implementations start
+            self.actor.layers[-1].weight.mul_(0.01)
+            self.actor.layers[-1].bias.zero_()
+        self.log_std = tnn.Parameter(torch.full((n_act,), math.log(init_std)))
+
+    def dist(self, x):
+        mu, _ = self.actor(x)
+        return torch.distributions.Normal(mu, self.log_std.clamp(math.log(0.01), math.log(1.0)).exp())
+
+    def value(self, x):
+        v, _ = self.critic(x)
+        return v.squeeze(-1)
+
+
+def pick_clips(train_dir, motions, limit):
+    paths = sorted(glob.glob(os.path.join(train_dir, "*.bvh")))
+    rx = re.compile(motions)
+    paths = [p for p in paths if rx.search(os.path.basename(p)) and "not-confident" not in p]
+    if limit:
+        paths = paths[::max(1, len(paths) // limit)][:limit]
+    if not paths:
+        raise SystemExit(f"no training clips in {train_dir} match {motions!r}")
+    return paths
+
+
+def export(path, model, stats, n_obs, n_act, info):
+    mean = stats.mean.astype(np.float32)
+    std = stats.std(0.05).astype(np.float32)
+    mean[-1], std[-1] = 1.75, 1.0  # o_user,scale: the user's height varies at run time, not in training
+    meta = {"frame_rate": 36, "paper": "QuestSim (Winkler et al. 2022), Appendix A", "random_weights": False,
+            "trained": True, "bodies": 21, "joint_dofs": n_act, "future_frames": 6,
+            "output": "tanh in [-1, 1], times 200 N m = joint torques", "credit": CREDIT, **info}
+    write_weights(path, nets.export_state_dict(model.actor), "questsim_policy", n_obs, n_act, meta=meta,
+                  normalization={"input_mean": mean, "input_std": std})
+
+
+def plot(curve_csv, png):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    rows = list(csv.DictReader(open(curve_csv)))
+    if len(rows) < 2:
+        return
+    x = np.array([float(r["samples"]) for r in rows]) / 1e6
+    fig, ax = plt.subplots(1, 3, figsize=(14, 4))
+    ax[0].plot(x, [float(r["reward"]) for r in rows], label="mean reward / step")
+    for k in ("r_q", "r_qd", "r_x", "r_xd", "r_f"):
+        ax[0].plot(x, [float(r[k]) for r in rows], lw=0.7, label=k)
+    ax[0].set_xlabel("samples (M)"); ax[0].legend(fontsize=7); ax[0].set_title("reward")
+    ax[1].plot(x, [float(r["episode_steps"]) for r in rows])
+    ax[1].set_xlabel("samples (M)"); ax[1].set_title("mean episode length (control steps)")
+    ax[2].plot(x, [float(r["residual"]) for r in rows], label="residual bound (N)")
+    ax[2].plot(x, [float(r["residual_used"]) for r in rows], label="residual used, mean (N)")
+    ax[2].set_xlabel("samples (M)"); ax[2].legend(fontsize=7); ax[2].set_title("root residual force")
+    fig.tight_layout(); fig.savefig(png, dpi=90); plt.close(fig)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="weights_tool.questsim.train")
+    ap.add_argument("train_dir")
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--resume", action="store_true")
+    ap.add_argument("--motions", default=DEFAULT_MOTIONS, help="regex on clip names")
+    ap.add_argument("--clips", type=int, default=0, help="use this many clips (0: all matching)")
+    ap.add_argument("--envs", type=int, default=128)
+    ap.add_argument("--horizon", type=int, default=32)
+    ap.add_argument("--samples", type=float, default=50e6, help="stop after this many control steps")
+    ap.add_argument("--hours", type=float, default=0, help="stop after this wall time (0: no limit)")
+    ap.add_argument("--lr", type=float, default=1e-4)
+    ap.add_argument("--gamma", type=float, default=0.95)
+    ap.add_argument("--lam", type=float, default=0.95)
+    ap.add_argument("--epochs", type=int, default=5)
+    ap.add_argument("--minibatches", type=int, default=4)
+    ap.add_argument("--init-std", type=float, default=0.05)
+    ap.add_argument("--residual-force", type=float, default=0.0, help="N at the start (0: none)")
+    ap.add_argument("--residual-torque", type=float, default=0.0, help="N m at the start")
+    ap.add_argument("--residual-anneal", type=float, default=20e6, help="samples to anneal it to 0")
+    ap.add_argument("--threads", type=int, default=1, help="torch threads")
+    ap.add_argument("--env-threads", type=int, default=1)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--n3p-lower", default=os.path.join(ROOT, "examples/weights/n3p_lower.json"))
+    a = ap.parse_args(argv)
+    torch.set_num_threads(a.threads)
+    torch.manual_seed(a.seed)
+    os.makedirs(a.out, exist_ok=True)
+    qe = load_module()
+    paths = pick_clips(a.train_dir, a.motions, a.clips)
+    clips = qe.load_clips(paths, a.n3p_lower)
+    cfg = qe.Config()
+    env = qe.Env(clips, [1.75] * a.envs, a.seed, cfg)
+    n_obs, n_act = qe.Env.obs_size, qe.Env.action_size
+    model = ActorCritic(n_obs, n_act, a.init_std)
+    opt = torch.optim.Adam(model.parameters(), lr=a.lr)
+    stats = RunningStats(n_obs)
+    it, samples = 0, 0
+    ckpt = os.path.join(a.out, "checkpoint.pt")
+    if a.resume and os.path.exists(ckpt):
+        s = torch.load(ckpt, weights_only=False)
+        model.load_state_dict(s["model"]); opt.load_state_dict(s["opt"]); stats.load(s["stats"])
+        it, samples = s["iteration"], s["samples"]
+        torch.set_rng_state(s["torch_rng"])
+        print(f"resumed at iteration {it}, {samples / 1e6:.2f} M samples", flush=True)
+    curve = os.path.join(a.out, "curve.csv")
+    fields = ["iteration", "samples", "wall_s", "reward", "r_q", "r_qd", "r_x", "r_xd", "r_f", "episode_steps",
+              "terminations", "residual", "residual_used", "std", "policy_loss", "value_loss", "steps_per_s"]
+    if not (a.resume and os.path.exists(curve)):
+        with open(curve, "w", newline="") as f:
+            csv.writer(f).writerow(fields)
+    print(f"{len(paths)} clips ({a.motions}), {a.envs} characters, obs {n_obs}, actions {n_act}", flush=True)
+    t_start = time.time()
+    N, T = a.envs, a.horizon
+    ep_len = np.zeros(N)
+    while samples < a.samples and (a.hours <= 0 or time.time() - t_start < a.hours * 3600):
+        frac = min(1.0, samples / a.residual_anneal) if a.residual_anneal > 0 else 1.0
+        res_f, res_t = a.residual_force * (1 - frac), a.residual_torque * (1 - frac)
+        env.set_residual(res_f, res_t)
+        mean_t = torch.tensor(stats.mean, dtype=torch.float32) if stats.n else torch.zeros(n_obs)
+        std_np = stats.std(0.05) if stats.n else np.ones(n_obs)
+        std_np[-1] = 1.0
+        std_t = torch.tensor(std_np, dtype=torch.float32)
+        if stats.n:
+            mean_t[-1] = 1.75
+        norm = lambda x: (torch.from_numpy(np.asarray(x, np.float32)) - mean_t) / std_t
+        obs = np.zeros((T, N, n_obs), np.float32)
+        act = np.zeros((T, N, n_act), np.float32)
+        logp = np.zeros((T, N), np.float32)
+        rew = np.zeros((T, N), np.float32)
+        val = np.zeros((T + 1, N), np.float32)
+        term = np.zeros((T, N), np.float32)
+        trunc_v = np.zeros((T, N), np.float32)  # V(final obs) of truncated episodes
+        done = np.zeros((T, N), np.float32)
+        terms = np.zeros(5)
+        used, ended, lens = 0.0, 0, []
+        t0 = time.time()
+        env_s = 0.0
+        with torch.no_grad():
+            for t in range(T):
+                o = env.obs.copy()
+                obs[t] = o
+                x = norm(o)
+                d = model.dist(x)
+                u = d.sample()
+                act[t] = u.numpy()
+                logp[t] = d.log_prob(u).sum(-1).numpy()
+                val[t] = model.value(x).numpy()
+                te = time.time()
+                env.step(act[t], a.env_threads)
+                env_s += time.time() - te
+                rew[t] = env.reward
+                term[t] = env.terminated
+                tr = env.truncated.astype(bool)
+                done[t] = np.maximum(env.terminated, env.truncated)
+                if tr.any():
+                    trunc_v[t, tr] = model.value(norm(env.final_obs[tr])).numpy()
+                terms += env.reward_terms.mean(0)
+                used += float(np.mean([env.residual_force(i) for i in range(0, N, 8)]))
+                ep_len += 1
+                for i in np.nonzero(done[t])[0]:
+                    lens.append(ep_len[i]); ep_len[i] = 0
+                ended += int(env.terminated.sum())
+            val[T] = model.value(norm(env.obs)).numpy()
+        stats.update(obs.reshape(-1, n_obs))
+        # GAE: a terminated step has no future; a truncated one bootstraps from its final observation.
+        adv = np.zeros((T, N), np.float32)
+        last = np.zeros(N, np.float32)
+        for t in reversed(range(T)):
+            nxt = np.where(done[t] > 0, trunc_v[t] * (1 - term[t]), val[t + 1])
+            delta = rew[t] + a.gamma * nxt - val[t]
+            last = delta + a.gamma * a.lam * (1 - done[t]) * last
+            adv[t] = last
+        ret = adv + val[:T]
+        B = T * N
+        xb = norm(obs.reshape(B, n_obs)); ab = torch.from_numpy(act.reshape(B, n_act))
+        lpb = torch.from_numpy(logp.reshape(B)); advb = torch.from_numpy(adv.reshape(B))
+        advb = (advb - advb.mean()) / (advb.std() + 1e-8)
+        retb = torch.from_numpy(ret.reshape(B))
+        mb = B // a.minibatches
+        pl_sum = vl_sum = 0.0
+        for _ in range(a.epochs):
+            perm = torch.randperm(B)
+            for k in range(a.minibatches):
+                idx = perm[k * mb:(k + 1) * mb]
+                d = model.dist(xb[idx])
+                ratio = (d.log_prob(ab[idx]).sum(-1) - lpb[idx]).exp()
+                pl = -torch.min(ratio * advb[idx], ratio.clamp(0.8, 1.2) * advb[idx]).mean()
+                vl = ((model.value(xb[idx]) - retb[idx]) ** 2).mean()
+                loss = pl + 0.5 * vl
+                opt.zero_grad(); loss.backward()
+                tnn.utils.clip_grad_norm_(model.parameters(), 1.0)
+                opt.step()
+                pl_sum += float(pl); vl_sum += float(vl)
+        it += 1
+        samples += B
+        nupd = a.epochs * a.minibatches
+        row = [it, samples, round(time.time() - t_start, 1), float(rew.mean()), *(terms / T), float(np.mean(lens)) if lens else T,
+               ended, res_f, used / T, float(model.log_std.exp().mean()), pl_sum / nupd, vl_sum / nupd, B / max(env_s, 1e-9)]
+        with open(curve, "a", newline="") as f:
+            csv.writer(f).writerow([f"{v:.6g}" if isinstance(v, float) else v for v in row])
+        if it % 10 == 0 or samples >= a.samples:
+            print(f"it {it} samples {samples / 1e6:.2f}M reward {rew.mean():.4f} ep {row[9]:.1f} residual {res_f:.0f} N "
+                  f"std {row[13]:.3f} env {row[16]:.0f} steps/s iter {time.time() - t0:.1f}s", flush=True)
+            torch.save({"model": model.state_dict(), "opt": opt.state_dict(), "stats": stats.state(), "iteration": it,
+                        "samples": samples, "torch_rng": torch.get_rng_state(), "args": vars(a)}, ckpt + ".tmp")
+            os.replace(ckpt + ".tmp", ckpt)
+            export(os.path.join(a.out, "questsim_policy.json"), model, stats, n_obs, n_act,
+                   {"samples": samples, "iterations": it, "motions": a.motions, "clips": len(paths),
+                    "residual_at_export": res_f})
+            plot(curve, os.path.join(a.out, "curve.png"))
+
+
+if __name__ == "__main__":
+    main()
