@@ -1,0 +1,89 @@
+"""The Python binding of the QuestSim training environment (_questsim_env, questsim_env.hpp) on real
+validation clips: zero-copy views, shapes, determinism, bad input, and one PPO update of the trainer
+(C++ behaviour itself: tests/training/test_questsim_env.cpp)."""
+import os
+import tarfile
+
+import numpy as np
+import pytest
+
+from .env import ROOT, load_module
+
+TAR = os.path.join(ROOT, "..", "shared", "data", "bandai-namco", "validation.tar.xz")
+N3P_LOWER = os.path.join(ROOT, "examples", "weights", "n3p_lower.json")
+qe = load_module()
+
+
+@pytest.fixture(scope="module")
+def clip_paths(tmp_path_factory):
+    if not os.path.exists(TAR):
+        pytest.skip(f"{TAR} not found")
+    out = tmp_path_factory.mktemp("clips")
+    want, got = ["raise-up-both", "_walk_", "wave-left"], {}
+    with tarfile.open(TAR) as t:
+        for m in t:
+            name = os.path.basename(m.name)
+            w = next((w for w in want if w in name and w not in got), None)
+            if w and name.endswith(".bvh"):
+                t.extract(m, out)
+                got[w] = os.path.join(out, m.name)
+            if len(got) == len(want):
+                break
+    return [got[w] for w in want]
+
+
+@pytest.fixture(scope="module")
+def clips(clip_paths):
+    return qe.load_clips(clip_paths, N3P_LOWER)
+
+
+def test_views_are_zero_copy_and_shaped(clips):
+    env = qe.Env(clips, [1.75, 1.6, 1.9], 1)
+    assert len(clips) == 3 and all(clips.frames(i) > 50 for i in range(3))
+    obs = env.obs
+    assert obs.shape == (3, qe.Env.obs_size) and obs.dtype == np.float32
+    assert env.reward.shape == (3,) and env.terminated.shape == (3,) and env.reward_terms.shape == (3, 5)
+    before = obs.copy()
+    env.step(np.zeros((3, qe.Env.action_size), np.float32))
+    assert not np.array_equal(before, obs)  # the same buffer, updated in place
+    assert np.all(np.isfinite(obs)) and np.all((env.reward >= 0) & (env.reward <= 1))
+    assert obs[:, -1] == pytest.approx([1.75, 1.6, 1.9])  # o_user,scale = each avatar's height
+
+
+def test_same_seed_same_bits_any_thread_count(clips):
+    a, b = qe.Env(clips, [1.75] * 8, 4), qe.Env(clips, [1.75] * 8, 4)
+    rng = np.random.default_rng(0)
+    for _ in range(40):
+        u = (0.05 * rng.standard_normal((8, qe.Env.action_size))).astype(np.float32)
+        a.step(u, 1)
+        b.step(u, 2)
+        assert np.array_equal(a.obs, b.obs) and np.array_equal(a.reward, b.reward)
+        assert np.array_equal(a.terminated, b.terminated) and np.array_equal(a.truncated, b.truncated)
+
+
+def test_bad_input_raises(clips):
+    env = qe.Env(clips, [1.75] * 2, 0)
+    with pytest.raises(ValueError, match=r"actions: expected float32 \[2, 48\]"):
+        env.step(np.zeros((3, qe.Env.action_size), np.float32))
+    env.step(np.full((2, qe.Env.action_size), np.nan, np.float32))  # non-finite actions: zero torques
+    assert np.all(np.isfinite(env.obs))
+    with pytest.raises(ValueError, match="height out of range"):
+        qe.Env(clips, [0.1], 0)
+    cmu = "/usr/share/assimp/models/BVH/01_01.bvh"
+    if os.path.exists(cmu):  # another skeleton: the retarget needs the standard skeleton's joints
+        with pytest.raises(Exception, match="01_01.bvh.*missing"):
+            qe.load_clips([cmu], N3P_LOWER)
+    with pytest.raises(Exception, match="nonexistent.bvh"):
+        qe.load_clips(["/nonexistent.bvh"], N3P_LOWER)
+
+
+def test_trainer_runs_one_update_resumes_and_exports(clip_paths, tmp_path):
+    from . import train
+    d = os.path.dirname(clip_paths[0])
+    args = [d, "--out", str(tmp_path), "--envs", "8", "--horizon", "8", "--samples", "640", "--motions", "."]
+    train.main(args)
+    rows = open(tmp_path / "curve.csv").read().splitlines()
+    assert len(rows) == 11  # header + 10 updates of 64 samples
+    assert (tmp_path / "questsim_policy.json").stat().st_size > 1e6 and (tmp_path / "curve.png").exists()
+    train.main(args[:-4] + ["--samples", "1280", "--motions", ".", "--resume"])
+    assert len(open(tmp_path / "curve.csv").read().splitlines()) == 21  # continued, not restarted
