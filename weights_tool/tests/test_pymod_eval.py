@@ -27,9 +27,11 @@ def test_offdist_same_figures_with_the_module_and_the_demo(sb, demo, clips, tmp_
     a, fa = offdist.evaluate(demo, clips, mode, model, 1, [], str(tmp_path), sb=None)
     b, fb = offdist.evaluate(None, clips, mode, model, 1, [], str(tmp_path), sb=sb)
     assert not fa and not fb and a["clips"] == b["clips"] == 2 and a["frames"] == b["frames"] > 1000
-    for k in ("mpjpe", "lower", "toe", "head", "skate", "still_feet"):
-        # the demo's BVH prints 6 significant digits: positions agree to ~1e-5 m
-        assert abs(a[k] - b[k]) < 2e-5 or (np.isnan(a[k]) and np.isnan(b[k])), (k, a[k], b[k])  # NaN: no still frames
+    # The demo's BVH prints 6 significant digits (~1e-5 m per joint and frame): mean position errors
+    # agree to ~1e-7 m; speeds, means of |a difference of positions|, keep the rounding noise
+    # (0.017 cm/s at most on the validation clips).
+    for k, tol in (("mpjpe", 2e-6), ("lower", 2e-6), ("toe", 2e-6), ("head", 2e-6), ("skate", 5e-4), ("still_feet", 5e-4)):
+        assert abs(a[k] - b[k]) < tol or (np.isnan(a[k]) and np.isnan(b[k])), (k, a[k], b[k])  # NaN: no still frames
     assert a["mpjpe"] > 0.01  # a real error, not a comparison of nothing
 
 
