@@ -26,6 +26,8 @@
 #include <vector>
 
 #include "batch_run.hpp"
+#include "demo_input.hpp"    // examples/: the demo's ground truth and metrics, for demo_metrics()
+#include "demo_metrics.hpp"
 #include "sparsebody/avatar/lobstr_pipeline.hpp"
 #include "sparsebody/avatar/n3p_direct.hpp"
 #include "sparsebody/avatar/n3p_physics.hpp"
@@ -483,6 +485,66 @@ void write_bvh(const std::string& path, const Pipeline& p, const py::dict& r) {
   w.write(path);
 }
 
+// The demo's printed metrics (examples/demo_metrics.cpp) of a run's rows against the clip that drove
+// it: the same Metrics class fed the same frames, so weights_tool.lobstr.cpp_eval needs no demo.
+// `r`: run() rows of a fresh pipeline over read_input(path, devices, device_seed, devices_stand).
+py::dict demo_metrics(const Pipeline& p, const py::dict& r, const std::string& path, bool devices, unsigned device_seed,
+                      double devices_stand) {
+  if (device_seed > 0 || devices_stand >= 0) devices = true;
+  auto in = std::make_unique<demo::Input>();  // Truth points into in->clip: keep it where it is
+  in->clip = recordings::read_bvh(path);
+  if (devices_stand >= 0) in->clip = recordings::with_held_frame(std::move(in->clip), devices_stand, 2.5);
+  const pose::JointMap map = pose::JointMap::from_names(in->clip.skeleton, path);
+  const double units = recordings::guess_units(in->clip.skeleton, map);
+  recordings::DeviceSynthesis ds;
+  ds.rate = 72;
+  if (device_seed > 0) ds.perturb = true, ds.seed = device_seed, ds.timing_jitter = 0.002, ds.losses_per_second = 0.2;
+  const recordings::SyntheticTrackers syn = devices ? recordings::synthesize_device_trackers(in->clip, map, units, ds)
+                                                    : recordings::synthesize_trackers(in->clip, map, units);
+  in->truth.init(in->clip, map, units, syn.floor);
+  in->have_truth = true, in->at_joints = !devices, in->leg = syn.leg;
+  const auto steps = r["steps"].cast<py::array_t<std::int32_t, kIn>>();
+  const auto has = r["has_output"].cast<ArrB>();
+  const auto root = r["root"].cast<ArrD>(), rot = r["rotation"].cast<ArrD>(), wrot = r["world_rotation"].cast<ArrD>();
+  const auto pos = r["position"].cast<ArrD>(), user = r["user_scale"].cast<ArrD>(), shown = r["time"].cast<ArrD>();
+  const auto contact = r["contact"].cast<ArrB>();
+  const py::ssize_t T = steps.shape(0), J = p.skeleton().size();
+  if (has.size() != T || pos.size() != T * J * 3 || wrot.size() != T * J * 4 || contact.size() != T * 2)
+    throw py::value_error("demo_metrics: the result's arrays do not match this pipeline's skeleton");
+  if (T != static_cast<py::ssize_t>(syn.frames.size()))
+    throw py::value_error("demo_metrics: " + std::to_string(T) + " rows but " + path + " gives " +
+                          std::to_string(syn.frames.size()) + " tracker frames with these options");
+  const double fps = p.frame_rate(), t0 = syn.frames.front().time;
+  demo::Metrics m(p.skeleton(), p.joint_map(), *in, fps);
+  pose::BodyPose bp;
+  bp.resize(static_cast<int>(J));
+  pose::WorldPose w;
+  w.resize(static_cast<int>(J));
+  long long model_frames = 0;  // the pipeline's frames(): ticks since the (fresh) start
+  for (py::ssize_t t = 0; t < T; ++t) {
+    model_frames += steps.data()[t];
+    if (steps.data()[t] <= 0 || !has.data()[t]) continue;
+    const double u = user.data()[t];
+    bp.root_position = Eigen::Map<const Eigen::Vector3d>(root.data() + t * 3);
+    for (py::ssize_t j = 0; j < J; ++j) {
+      const double* q = rot.data() + (t * J + j) * 4;
+      const double* qw = wrot.data() + (t * J + j) * 4;
+      bp.local[j] = Eigen::Quaterniond(q[3], q[0], q[1], q[2]);
+      w.rotation[j] = Eigen::Quaterniond(qw[3], qw[0], qw[1], qw[2]);
+      w.position[j] = Eigen::Map<const Eigen::Vector3d>(pos.data() + (t * J + j) * 3) / u;
+    }
+    // the clip time shown, as the demo's stream(): physics its output time, kinematic the last step
+    const double seconds = p.physics() ? shown.data()[t] - t0 : model_frames / fps - 1.0 / fps;
+    const bool c[2] = {contact.data()[t * 2], contact.data()[t * 2 + 1]};
+    m.add(bp, w, u, seconds, c);
+  }
+  const demo::Metrics::Summary s = m.summary();
+  py::dict d;
+  d["frames"] = s.frames, d["contact"] = s.contact, d["rot"] = s.rot_valid ? py::object(py::float_(s.rot)) : py::none();
+  d["toe"] = s.toe, d["mpjpe"] = s.mpjpe, d["mpjpe_lower"] = s.lower, d["jitter"] = s.jitter, d["skate"] = s.skate;
+  return d;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(sparsebody, m) {
@@ -573,6 +635,10 @@ PYBIND11_MODULE(sparsebody, m) {
   m.def("read_tracker_csv", [](const std::string& path) { return frames_dict(recordings::read_tracker_csv(path)); }, py::arg("path"));
   m.def("write_bvh", &write_bvh, py::arg("path"), py::arg("pipeline"), py::arg("result"),
         "The demo's output BVH (centimetres) from run() results (concatenate batches first).");
+  m.def("demo_metrics", &demo_metrics, py::arg("pipeline"), py::arg("result"), py::arg("path"), py::arg("devices") = false,
+        py::arg("device_seed") = 0u, py::arg("devices_stand") = -1.0,
+        "The demo's printed metrics (contact %, rot deg or None, toe, mpjpe, mpjpe_lower cm, jitter km/s^3, skate cm/s) "
+        "of a fresh pipeline's run() rows over read_input(path, ...) with the same options.");
   m.def("fastest_storage", [] {
     const auto c = nn::fastest_storage();
     return py::make_tuple(nn::storage_name(c.storage), c.reason);

@@ -70,3 +70,27 @@ def test_plots_command_line(sb, tmp_path):  # noqa: F811
     assert sorted(os.listdir(tmp_path)) == ["01_01_n3p_foot_height.png", "01_01_n3p_joint_error.png"]
     t, e, out, tr = plots.clip_errors(pymod.run_clip(sb, CLIP, "n3p"))
     assert e.shape == (len(t), 12) and 0.005 < e.mean() < 0.3 and np.all(np.diff(t) > 0)
+
+
+@pytest.mark.parametrize("opts", [["--model", "lobstr"], ["--model", "n3p", "--physics", "--devices", "--device-seed", "9"]],
+                         ids=["lobstr", "n3p physics devices"])
+def test_demo_metrics_equal_the_demos_printed_metrics(sb, demo, tmp_path, opts):  # noqa: F811
+    """sparsebody.demo_metrics is the demo's Metrics on the same rows: its printout to 2 decimals."""
+    import re
+    import subprocess
+    from weights_tool.lobstr import cpp_eval
+    need_clip()
+    r = subprocess.run([demo, CLIP, "-o", str(tmp_path / "o.bvh"), "--quiet"] + opts, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    printed = {}
+    for line in r.stdout.splitlines():
+        for label, k in cpp_eval.KEYS.items():
+            if line.strip().startswith(label):
+                v = re.findall(r"[-+]?\d+\.\d+", line)  # as cpp_eval parses it
+                if v:
+                    printed[k] = float(v[0])
+    vals, frames = cpp_eval.module_metrics(sb, CLIP, opts)
+    assert f"metrics vs the input clip ({frames} frames)" in r.stdout and frames > 500
+    assert set(printed) == set(cpp_eval.KEYS.values()) - {"rot"}  # CMU skeleton: rotation error n/a
+    for k, v in printed.items():
+        assert abs(vals[k] - v) <= 0.005 + 1e-9, (k, vals[k], v)
