@@ -261,8 +261,8 @@ def main(argv=None):
         argv = argv[:argv.index("--")]
     p = argparse.ArgumentParser(prog="weights_tool.offdist", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("paths", nargs="+", metavar="[DEMO] VALIDATION_DIR",
-                   help="the demo binary (needed for --runner demo) and the validation folder")
+    p.add_argument("paths", nargs="+", metavar="PATH",
+                   help="[DEMO] VALIDATION_DIR: the demo binary (needed for --runner demo) and the validation folder")
     p.add_argument("--runner", choices=["auto", "module", "demo"], default="auto",
                    help="auto: the sparsebody Python module when importable, else the demo subprocess")
     p.add_argument("--plots", default=None, help="folder for PNG figures of each model's first clip (module runner)")
