@@ -294,3 +294,36 @@ def test_questsim_with_explicit_weights(sb, tmp_path):
         sb.QuestSim(str(w), float("nan"))
     with pytest.raises(OSError):
         sb.QuestSim("/nowhere.json", 1.75)
+
+
+def test_one_batch_at_a_time_per_pipeline(sb):
+    """A second thread calling run() on a pipeline that is mid-batch gets RuntimeError; an empty
+    batch is a no-op (so probing changes nothing)."""
+    need_clip()
+    inp = sb.read_input(CLIP)
+    n = len(inp["time"])
+    args = [np.tile(a, (4,) + (1,) * (a.ndim - 1)) for a in (inp["time"], inp["position"], inp["orientation"], inp["valid"])]
+    args[0] = np.concatenate([inp["time"] + k * (inp["time"][-1] + 1) for k in range(4)])
+    empty = [a[:0] for a in args]
+    p = sb.create("n3p_physics")
+    e0 = p.run(*empty)
+    assert e0["position"].shape == (0, len(p.joint_names), 3)
+    result, errors = {}, []
+
+    def long_batch():
+        result["out"] = p.run(*args)
+
+    t = threading.Thread(target=long_batch)
+    t.start()
+    while t.is_alive():
+        try:
+            p.run(*empty)
+        except RuntimeError as e:
+            errors.append(str(e))
+            break
+        time.sleep(0.001)
+    t.join()
+    assert errors and "running a batch in another thread" in errors[0]
+    ref = sb.create("n3p_physics").run(*args)  # the probing changed nothing
+    assert all(same(result["out"][k], ref[k]) for k in ref)
+    assert result["out"]["has_output"].sum() > 3 * n
