@@ -3,6 +3,7 @@
 set -euo pipefail
 pkgs=(cmake g++ make libeigen3-dev libxsimd-dev nlohmann-json3-dev doctest-dev libbenchmark-dev
       python3-torch python3-numpy python3-pytest libopenblas0-pthread
+      pybind11-dev python3-dev python3-matplotlib  # the Python module (weights_tool/native) and its plots
       libtorch-dev libmujoco-dev assimp-testmodels clang libclang-rt-14-dev
       g++-aarch64-linux-gnu qemu-user)  # the last two: ARM64 cross build + emulator (.ci/isa.sh)
 missing=()

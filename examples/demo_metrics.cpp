@@ -92,18 +92,33 @@ void Metrics::add_jitter(const pose::WorldPose& W, double user) {
   hist_[2] = hist_[1], hist_[1] = hist_[0], hist_[0] = cur;
 }
 
+Metrics::Summary Metrics::summary() const {
+  Summary s;
+  s.frames = n_;
+  if (n_ == 0) return s;
+  s.contact = 100.0 * contact_ok_ / std::max(1L, contact_n_);
+  s.rot_valid = n_rot_ > 0;
+  s.rot = n_rot_ ? rot_ / n_rot_ : 0;
+  s.toe = 100 * toe_ / n_;
+  s.mpjpe = 100 * mpjpe_ / n_;
+  s.lower = 100 * lower_sum_ / n_;
+  s.jitter = jitter_ / std::max(1L, n_jit_) / 1000;
+  s.skate = 100 * skate_ / std::max(1L, n_skate_);
+  return s;
+}
+
 void Metrics::print() const {
   if (n_ == 0) return;
+  const Summary s = summary();
   std::printf("metrics vs the input clip (%ld frames):\n", n_);
-  std::printf("  contact accuracy       %6.2f %%\n", 100.0 * contact_ok_ / std::max(1L, contact_n_));
-  if (n_rot_) std::printf("  lower-body rot. error  %6.2f deg\n", rot_ / n_rot_);
+  std::printf("  contact accuracy       %6.2f %%\n", s.contact);
+  if (s.rot_valid) std::printf("  lower-body rot. error  %6.2f deg\n", s.rot);
   else std::printf("  lower-body rot. error     n/a (different skeleton: positions only)\n");
-  std::printf("  toe position error     %6.2f cm\n", 100 * toe_ / n_);
-  std::printf("  MPJPE (12 joints)      %6.2f cm\n", 100 * mpjpe_ / n_);
-  std::printf("  MPJPE lower body       %6.2f cm\n", 100 * lower_sum_ / n_);
-  std::printf("  jitter (lower body)    %6.2f km/s^3\n", jitter_ / std::max(1L, n_jit_) / 1000);
-  std::printf("  foot skating           %6.2f cm/s (horizontal toe speed while in predicted contact)\n",
-              100 * skate_ / std::max(1L, n_skate_));
+  std::printf("  toe position error     %6.2f cm\n", s.toe);
+  std::printf("  MPJPE (12 joints)      %6.2f cm\n", s.mpjpe);
+  std::printf("  MPJPE lower body       %6.2f cm\n", s.lower);
+  std::printf("  jitter (lower body)    %6.2f km/s^3\n", s.jitter);
+  std::printf("  foot skating           %6.2f cm/s (horizontal toe speed while in predicted contact)\n", s.skate);
 }
 
 }  // namespace demo

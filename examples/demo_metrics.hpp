@@ -26,6 +26,16 @@ class Metrics {
   long frames() const noexcept { return n_; }
   void print() const;
 
+  // The printed figures (print() shows them): contact accuracy %, lower-body rotation error deg
+  // (rot_valid false: a different skeleton), toe error, MPJPE, MPJPE lower body cm, jitter km/s^3,
+  // foot skating cm/s. The Python module (weights_tool/native) returns them to weights_tool.
+  struct Summary {
+    long frames = 0;
+    bool rot_valid = false;
+    double contact = 0, rot = 0, toe = 0, mpjpe = 0, lower = 0, jitter = 0, skate = 0;
+  };
+  Summary summary() const;
+
  private:
   void add_contacts(const sparsebody::pose::WorldPose& W, double user, const bool (&contact)[2]);
   void add_jitter(const sparsebody::pose::WorldPose& W, double user);

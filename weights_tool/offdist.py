@@ -23,8 +23,13 @@ Metrics (12 joints mapped by role: hips, head, hands, thighs, knees, ankles, toe
   head         mean distance of the output's head joint from the clip's (the head joint sits where the
                eye-point offset puts it relative to the headset) (cm)
 
-  /usr/bin/python3 -m weights_tool.offdist DEMO VALIDATION_DIR --modes nominal devices s155 ... \\
-        [--models lobstr n3p] [--every 5] [--json out.json] [-- extra demo options]
+  /usr/bin/python3 -m weights_tool.offdist [DEMO] VALIDATION_DIR --modes nominal devices s155 ... \\
+        [--models lobstr n3p] [--every 5] [--json out.json] [--runner auto|module|demo] [--plots DIR]
+        [-- extra demo options]
+
+Runner: the sparsebody Python module (weights_tool/pymod.py) when it is importable, in-process and
+with the demo's inputs, sizing and rows; else (or --runner demo) the demo as a subprocess, its output
+BVH read back. The figures agree to the BVH's print rounding (README, "Use it from Python").
 """
 import argparse
 import copy
@@ -37,6 +42,7 @@ import tempfile
 
 import numpy as np
 
+from . import pymod
 from .lobstr.skeleton import Clip, contact_labels
 
 ROLES = ["hips", "head", "hand_l", "hand_r", "upleg_l", "upleg_r", "leg_l", "leg_r", "foot_l", "foot_r",
@@ -80,7 +86,15 @@ def compare(out_bvh, truth_bvh, truth_units=None, out_units=0.01, hold=None):
     the clip's units are guessed from its leg length unless given. hold = (at, seconds): the run held
     the clip's frame at `at` s for `seconds` (the demo's --devices-stand): the output's held frames
     are compared with that frame, the rest with the clip one to one."""
-    out, truth = Clip(out_bvh, units=out_units), Clip(truth_bvh, units=truth_units)
+    out = Clip(out_bvh, units=out_units)
+    return compare_positions(out.pw[:, [out.roles[k] for k in ROLES]], truth_bvh, truth_units, hold)
+
+
+def compare_positions(P_out, truth_bvh, truth_units=None, hold=None):
+    """compare() of output positions P_out [frames, 12 ROLES, 3] (m, one row per 30 Hz output frame):
+    the demo's BVH read back, or the Python module's rows (pymod.Run.bvh_positions)."""
+    truth = Clip(truth_bvh, units=truth_units)
+    out = _Positions(P_out)
     fps = truth.fps
     if hold is not None and abs(truth.fps - 30.0) < 0.5:
         f0, nh = int(round(hold[0] * fps)), int(round(hold[1] * fps))
@@ -95,7 +109,7 @@ def compare(out_bvh, truth_bvh, truth_units=None, out_units=0.01, hold=None):
     n = min(out.frames, truth.frames)
     if n < 2:
         return None
-    Po = out.pw[:n, [out.roles[k] for k in ROLES]]
+    Po = out.pw[:n]
     Pt = truth.pw[:n, [truth.roles[k] for k in ROLES]].copy()
     Pt[..., 1] -= truth.floor()
     if abs(truth.fps - 30.0) > 0.5:
@@ -104,7 +118,7 @@ def compare(out_bvh, truth_bvh, truth_units=None, out_units=0.01, hold=None):
         idx = np.minimum(np.round(t * truth.fps).astype(int), truth.frames - 1)
         Pt_full = truth.pw[:, [truth.roles[k] for k in ROLES]].copy()
         Pt_full[..., 1] -= truth.floor()
-        Pt, Po, fps, n = Pt_full[idx], out.pw[:, [out.roles[k] for k in ROLES]], 30.0, out.frames
+        Pt, Po, fps, n = Pt_full[idx], out.pw, 30.0, out.frames
         C = contact_labels(truth, truth.floor())[idx]
     else:
         C = contact_labels(truth, truth.floor())[:n]
@@ -124,6 +138,17 @@ def compare(out_bvh, truth_bvh, truth_units=None, out_units=0.01, hold=None):
     m["still_feet"] = (v[st].sum() / 2, int(st.sum()))
     m["frames"] = (n, 1)
     return m
+
+
+class _Positions:
+    """The part of a Clip that compare_positions reads: pw [frames, 12 ROLES, 3]."""
+
+    def __init__(self, P):
+        self.pw = np.asarray(P)
+
+    @property
+    def frames(self):
+        return self.pw.shape[0]
 
 
 def run_demo(demo, src, out, model, extra, trackers_out=None):
@@ -156,7 +181,22 @@ def mode_inputs(mode, val_dir, every, tmp):
     return f2, DEVICES, f2
 
 
-def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None):
+def module_run(sb, src, model, opts, trackers_out=""):
+    """(0, positions [n, 12 ROLES, 3]) of one run through the Python module, the rows and numbers the
+    demo's output BVH would hold (pymod.Run.bvh_positions), or (1, error) where the demo fails."""
+    try:
+        kw = pymod.demo_options(opts)
+        kw.setdefault("model", model)
+        r = pymod.run_clip(sb, src, trackers_out=trackers_out, **kw)
+    except (ValueError, OSError) as e:
+        return 1, str(e)
+    P = r.bvh_positions()
+    return 0, P[:, [r.pipe.roles[k] for k in ROLES]]
+
+
+def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None, sb=None):
+    """One mode and model over the clips; sb (the sparsebody module): run in-process instead of the
+    demo subprocess (same inputs, same rows, the BVH's print rounding aside)."""
     src, opts, truth = mode_inputs(mode, val_dir, every, tmp)
     tot, fails = {}, []
     for ci, (s, t) in enumerate(zip(src, truth)):
@@ -167,22 +207,36 @@ def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None):
             opts_c += ["--device-seed", str(1000 + ci)]  # a different user and devices per clip
             if "--devices-stand" in opts_c:
                 hold = (float(opts_c[opts_c.index("--devices-stand") + 1]), 2.5)
+        csv = os.path.join(tmp, "session.csv")
         if mode == "csv":
             half = 0.5 * Clip(s).frames / 30.0
             opts_c += ["--devices-stand", f"{half:.3f}"]
             hold = (half, 2.5)
-            csv = os.path.join(tmp, "session.csv")
-            rc, log = run_demo(demo, s, os.path.join(tmp, "unused.bvh"), model, opts_c + extra, trackers_out=csv)
+        if sb is not None:
+            if mode == "csv":
+                kw = pymod.demo_options(opts_c)
+                sb.read_input(s, devices=True, device_seed=kw["device_seed"], devices_stand=kw["devices_stand"],
+                              trackers_out=csv)
+                rc, res = module_run(sb, csv, model, extra)
+            else:
+                rc, res = module_run(sb, s, model, opts_c + extra)
+            if rc != 0:
+                fails.append((s, [res]))
+                continue
+            m = compare_positions(res, t, hold=hold)
+        else:
+            if mode == "csv":
+                rc, log = run_demo(demo, s, os.path.join(tmp, "unused.bvh"), model, opts_c + extra, trackers_out=csv)
+                if rc != 0:
+                    fails.append((s, log.strip().splitlines()[-1:]))
+                    continue
+                rc, log = run_demo(demo, csv, out, model, extra)
+            else:
+                rc, log = run_demo(demo, s, out, model, opts_c + extra)
             if rc != 0:
                 fails.append((s, log.strip().splitlines()[-1:]))
                 continue
-            rc, log = run_demo(demo, csv, out, model, extra)
-        else:
-            rc, log = run_demo(demo, s, out, model, opts_c + extra)
-        if rc != 0:
-            fails.append((s, log.strip().splitlines()[-1:]))
-            continue
-        m = compare(out, t, hold=hold)
+            m = compare(out, t, hold=hold)
         if m is None:
             continue
         if per_clip is not None:
@@ -207,8 +261,11 @@ def main(argv=None):
         argv = argv[:argv.index("--")]
     p = argparse.ArgumentParser(prog="weights_tool.offdist", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("demo")
-    p.add_argument("val_dir")
+    p.add_argument("paths", nargs="+", metavar="PATH",
+                   help="[DEMO] VALIDATION_DIR: the demo binary (needed for --runner demo) and the validation folder")
+    p.add_argument("--runner", choices=["auto", "module", "demo"], default="auto",
+                   help="auto: the sparsebody Python module when importable, else the demo subprocess")
+    p.add_argument("--plots", default=None, help="folder for PNG figures of each model's first clip (module runner)")
     p.add_argument("--modes", nargs="+", default=["nominal", "devices", "s155", "s190", "longlegs", "shortlegs",
                                                    "csv", "cmu"])
     p.add_argument("--models", nargs="+", default=["lobstr", "n3p"])
@@ -216,6 +273,18 @@ def main(argv=None):
     p.add_argument("--json", default=None)
     p.add_argument("--tmp", default=None, help="folder for the retargeted clips and outputs (kept)")
     a = p.parse_args(argv)
+    if len(a.paths) > 2:
+        p.error("at most two paths: [DEMO] VALIDATION_DIR")
+    a.demo, a.val_dir = (a.paths[0], a.paths[1]) if len(a.paths) == 2 else (None, a.paths[0])
+    sb = None if a.runner == "demo" else pymod.load(required=a.runner == "module" or a.demo is None)
+    if sb is not None:
+        try:
+            pymod.demo_options(extra)
+        except ValueError as e:  # an option only the demo has: use it if we have it
+            if a.runner == "module" or a.demo is None:
+                p.error(str(e))
+            sb = None
+    print(f"runner  {'the sparsebody Python module (in-process)' if sb else 'the demo subprocess ' + a.demo}")
     tmp = a.tmp or tempfile.mkdtemp(prefix="offdist")
     os.makedirs(tmp, exist_ok=True)
     results, clips = [], []
@@ -223,16 +292,25 @@ def main(argv=None):
           f"{'skate':>7s} {'still':>7s}   (cm, cm/s)")
     for model in a.models:
         for mode in a.modes:
-            r, fails = evaluate(a.demo, a.val_dir, mode, model, a.every, extra, tmp, clips)
+            r, fails = evaluate(a.demo, a.val_dir, mode, model, a.every, extra, tmp, clips, sb=sb)
             r.update(model=model, mode=mode)
             results.append(r)
             c = lambda k: 100 * r.get(k, float("nan"))
             print(f"{model:7s} {mode:10s} {r['clips']:5d} {c('mpjpe'):7.2f} {c('lower'):7.2f} {c('toe'):7.2f} "
                   f"{c('head'):7.2f} {c('skate'):7.2f} {c('still_feet'):7.2f}" +
                   (f"   {len(fails)} failed: {fails[0]}" if fails else ""), flush=True)
+    if a.plots and sb is not None:
+        from . import plots
+        first = sorted(glob.glob(os.path.join(a.val_dir, "*.bvh")))[:1]
+        for model in a.models:
+            for f in first:
+                kw = dict(pymod.demo_options(extra), model=model)
+                for png in plots.plot_clip(sb, f, os.path.join(a.plots, model), **kw):
+                    print(f"wrote   {png}")
     if a.json:
         with open(a.json, "w") as f:
-            json.dump({"summary": results, "clips": clips, "demo_options": extra}, f, indent=1)
+            json.dump({"summary": results, "clips": clips, "demo_options": extra,
+                       "runner": "module" if sb else "demo"}, f, indent=1)
     return 0
 
 
