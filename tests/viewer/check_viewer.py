@@ -164,7 +164,7 @@ def check_screenshot(rep, png):
             xy = project(rep, pos[j])
             # feet are drawn over the legs; only the other foot, in the other state, can cover this one
             other = [project(rep, pos[k]) for k in a["feet"][1 - s]]
-            if a["contacts"][0] != a["contacts"][1] and min(np.hypot(o[0] - xy[0], o[1] - xy[1]) for o in other) < 2 * foot_px + 3:
+            if a["contacts"][0] != a["contacts"][1] and min(np.hypot(o[0] - xy[0], o[1] - xy[1]) for o in other) < foot_px + 4:
                 continue
             check(frac_near(want, xy, 2) > 0.5, f"foot {side} joint {a['names'][j]} at {xy[0]:.0f},{xy[1]:.0f} is not "
                   f"{'magenta (in contact)' if a['contacts'][s] else 'the avatar colour (no contact)'}")
