@@ -7,13 +7,13 @@
    the floor and the side-by-side offset, which are fitted).
 2. A screenshot at a known frame: the avatar's colour must be where the reported camera projects
    its head and feet (the feet magenta exactly when the page says they are in contact), the clip's
-   colour where its head is, background above the head, no avatar colour away from the avatar,
-   and enough avatar pixels to prove it drew.
+   colour at its top joint, no avatar colour above the head or away from the avatar, the grid's
+   colour at whole-metre crossings of y = 0, and enough avatar pixels to prove it drew.
 3. Self-contained: no <script src>/<link>/<img>, and the page loaded no resources.
 
 Exit 0 pass, 1 fail, 77 skip (no Chromium). --expect-fail TAMPER breaks the page on purpose
 (no-render: never draws; shift: the avatar 30 cm off its data; draw-offset: the data
-right but the avatar drawn 30 cm off) and passes only if a check fails.
+right but the avatar drawn 30 cm off; floor-high: the grid 30 cm above y = 0) and passes only if a check fails.
 """
 import argparse
 import html
@@ -179,18 +179,38 @@ def check_screenshot(rep, png):
     outside = ((xs < pts[:, 0].min() - margin) | (xs > pts[:, 0].max() + margin) |
                (ys < pts[:, 1].min() - margin - 2 * margin) | (ys > pts[:, 1].max() + margin))
     check(outside.sum() <= 0.01 * n, f"{int(outside.sum())} avatar pixels away from where its joints project")
+    # the floor: whole-metre grid crossings at y = 0 (away from the figures) show the grid's colour
+    grid = colour_mask(img, col["grid"], 30)
+    figures = list(pts) + ([project(rep, p) for p in rep["truth"]["positions"]] if rep["truth"] else [])
+    figures += [project(rep, np.array(t["position"])) for t in rep["trackers"] if t["visible"]]
+    cx, cz = np.round(np.array(rep["camera"]["target"])[[0, 2]])
+    seen = tried = 0
+    for gx in np.arange(cx - 3, cx + 4):
+        for gz in np.arange(cz - 3, cz + 2):
+            if abs(gx) < 0.5 or abs(gz) < 0.5:
+                continue  # the axes have their own colour
+            xy = project(rep, np.array([gx, 0.0, gz]))
+            if not (left + 5 < xy[0] < img.shape[1] - 5 and 5 < xy[1] < img.shape[0] - 5):
+                continue
+            if min(np.hypot(f[0] - xy[0], f[1] - xy[1]) for f in figures) < 40:
+                continue
+            tried += 1
+            seen += frac_near(grid, xy, 2) > 0
+    check(tried >= 5 and seen >= 0.8 * tried, f"the floor grid is not at y = 0: {seen} of {tried} grid crossings seen")
     if rep["truth"] and rep["truth"]["visible"]:
         t = np.array(rep["truth"]["positions"])
         top = t[np.argmax(t[:, 1])]
         xy = project(rep, top)
         check(frac_near(blue, xy, 3) > 0.3, f"no clip colour at its top joint's projection {xy[0]:.0f},{xy[1]:.0f}")
         check(frac_near(body, xy, 3) == 0, "avatar colour where the clip figure is")
-    return n, head
+    return n, head, (seen, tried)
 
 
 TAMPER = {
     "no-render": ("function render() { renderer.render(scene, camera); }", "function render() {}"),
     "shift": ("this.joints[j].position.set(pos[o] / 1000,", "this.joints[j].position.set(pos[o] / 1000 + 0.3,"),
+    "floor-high": ("g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(v), 3));",  # grid 30 cm up
+                   "g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(v), 3)); g.translate(0, 0.3, 0);"),
     "draw-offset": ("function render() { renderer.render(scene, camera); }",  # data right, picture 30 cm off
                     "function render() { avatar.group.position.x = 0.3; renderer.render(scene, camera); avatar.group.position.x = 0; }"),
 }
@@ -243,7 +263,7 @@ def main():
             err = check_positions(rep, out_bvh)
             terr = check_truth(rep, a.clip) if rep["truth"] else None
             run_chromium(chromium, [f"--screenshot={png}"], url, profile)
-            n, head = check_screenshot(rep, png)
+            n, head, grid = check_screenshot(rep, png)
     except CheckFailed as e:
         if a.expect_fail:
             print(f"PASS: the broken page ('{a.expect_fail}') is caught: {e}")
@@ -256,7 +276,7 @@ def main():
     print(f"PASS: {page} ({size / 1e6:.2f} MB, three.js r{rep['revision']}): {rep['frames']} frames; page vs BVH FK max "
           f"{1000 * err:.2f} mm" + (f", clip figure residual {1000 * terr:.2f} mm" if terr is not None else "") +
           f" (tolerance {1000 * TOL_M:.0f} mm); frame {frame}: {n} avatar pixels, head at {head[0]:.0f},{head[1]:.0f}, "
-          f"contacts L {rep['avatar']['contacts'][0]} R {rep['avatar']['contacts'][1]}")
+          f"contacts L {rep['avatar']['contacts'][0]} R {rep['avatar']['contacts'][1]}, grid crossings {grid[0]}/{grid[1]}")
     return 0
 
 
