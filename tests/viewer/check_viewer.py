@@ -89,7 +89,10 @@ def check_positions(rep, out_bvh):
         err = np.linalg.norm(got - want, axis=1).max()
         worst = max(worst, err)
         check(err <= TOL_M, f"frame {pr['frame']}: page joints are up to {100 * err:.2f} cm from the BVH's FK (tolerance {100 * TOL_M} cm)")
-    return worst
+    # the shown frame's joints, which the screenshot check projects
+    err = np.linalg.norm(np.array(rep["avatar"]["positions"]) - P[rep["frame"], idx], axis=1).max()
+    check(err <= TOL_M, f"shown frame {rep['frame']}: page joints are up to {100 * err:.2f} cm from the BVH's FK")
+    return max(worst, err)
 
 
 def check_truth(rep, clip_path):
