@@ -1,6 +1,7 @@
 // sparsebody_demo's input: tracker frames from a BVH clip (synthesised trackers; the clip is the
 // ground truth) or a tracker CSV session.
 #pragma once
+#include <string>
 #include <vector>
 
 #include "demo_options.hpp"
@@ -34,6 +35,7 @@ struct Input {
   double leg = 0;  // BVH: the clip's leg length (m), to scale it to the standard skeleton
   double fps = 0;
   bool pelvis = false;  // any valid pelvis tracker frame
+  std::string model;  // what runs, one line (set by the pipeline's setup; shown by the --html page)
 };
 
 // Reads o.input (printing what it found), drops the pelvis for --no-pelvis and writes

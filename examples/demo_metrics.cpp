@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include <nlohmann/json.hpp>
+
 using namespace sparsebody;
 
 namespace demo {
@@ -119,6 +121,21 @@ void Metrics::print() const {
   std::printf("  MPJPE lower body       %6.2f cm\n", s.lower);
   std::printf("  jitter (lower body)    %6.2f km/s^3\n", s.jitter);
   std::printf("  foot skating           %6.2f cm/s (horizontal toe speed while in predicted contact)\n", s.skate);
+}
+
+std::string Metrics::json() const {
+  nlohmann::json a = nlohmann::json::array();
+  auto add = [&](const char* name, double v, const char* unit, bool ok = true) {
+    a.push_back({{"name", name}, {"value", ok && n_ > 0 ? nlohmann::json(v) : nlohmann::json(nullptr)}, {"unit", unit}});
+  };
+  add("contact accuracy", 100.0 * contact_ok_ / std::max(1L, contact_n_), "%");
+  add("lower-body rot. error", rot_ / std::max(1L, n_rot_), "deg", n_rot_ > 0);
+  add("toe position error", 100 * toe_ / std::max(1L, n_), "cm");
+  add("MPJPE (12 joints)", 100 * mpjpe_ / std::max(1L, n_), "cm");
+  add("MPJPE lower body", 100 * lower_sum_ / std::max(1L, n_), "cm");
+  add("jitter (lower body)", jitter_ / std::max(1L, n_jit_) / 1000, "km/s^3");
+  add("foot skating", 100 * skate_ / std::max(1L, n_skate_), "cm/s");
+  return a.dump();
 }
 
 }  // namespace demo

@@ -2,6 +2,7 @@
 // accuracy, lower-body rotation error (same skeleton only), toe error, MPJPE (12 joints, lower body),
 // jitter and foot skating.
 #pragma once
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -25,6 +26,8 @@ class Metrics {
 
   long frames() const noexcept { return n_; }
   void print() const;
+  // The printed numbers as a JSON array of {name, value, unit} (null value: n/a), for the --html page.
+  std::string json() const;
 
   // The printed figures (print() shows them): contact accuracy %, lower-body rotation error deg
   // (rot_valid false: a different skeleton), toe error, MPJPE, MPJPE lower body cm, jitter km/s^3,

@@ -16,7 +16,7 @@ void usage(const char* msg) {
                "                       [--mode streaming|window] [--no-contact-ik] [--trackers-out trackers.csv]\n"
                "                       [--calibration-frame N] [--devices [--device-seed S] [--devices-stand T]]\n"
                "                       [--storage auto|float|f16|q8]\n"
-               "                       [--physics] [--quiet]\n"
+               "                       [--physics] [--html page.html [--three-js three.min.js]] [--quiet]\n"
                "calibration: automatic from standing windows (default); --calibration-frame N forces input frame N\n"
                "             (a T-pose or an upright standing frame); BVH input without --devices is sized by leg length\n"
                "exit codes: 0 done; 1 the run failed (no usable calibration, a model the input cannot drive);\n"
@@ -53,6 +53,8 @@ Options parse_options(int argc, char** argv) {
       else usage("--mode must be streaming or window");
     } else if (a == "--no-contact-ik") o.contact_ik = false;
     else if (a == "--trackers-out") o.trackers_out = next();
+    else if (a == "--html") o.html = next();
+    else if (a == "--three-js") o.three_js = next();
     else if (a == "--calibration-frame") {
       const std::string v = next();
       char* end = nullptr;

@@ -10,6 +10,8 @@ enum class Model { Auto, LoBSTr, N3P };
 
 struct Options {
   std::string input, output = "avatar.bvh", weights, trackers_out;
+  // --html FILE: the browser page of the run (demo_viewer.hpp); three_js: --three-js PATH, then the file found.
+  std::string html, three_js;
   Model model = Model::Auto;
   sparsebody::avatar::RunMode mode = sparsebody::avatar::RunMode::Streaming;
   bool contact_ik = true, quiet = false, no_pelvis = false, physics = false;

@@ -3,14 +3,20 @@
 // calibrate, calibration_report and meta().frame_rate): fitting the user, the frame loop with its progress lines, the
 // output BVH, timing, and the metrics against the clip.
 #pragma once
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <optional>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "demo_input.hpp"
 #include "demo_metrics.hpp"
 #include "demo_options.hpp"
+#include "demo_viewer.hpp"
 #include "sparsebody/recordings/bvh.hpp"
 
 namespace demo {
@@ -90,6 +96,13 @@ std::optional<Metrics> stream(const Options& o, Input& in, Pipeline& pipe, Shown
   double step_seconds = 0;
   long steps = 0;
   const std::size_t n = in.frames.size(), report = std::max<std::size_t>(1, n / 10);
+  std::optional<ViewerRecorder> viewer;  // --html: reserved for the whole run up front
+  if (!o.html.empty()) {
+    viewer.emplace();
+    const double seconds = n > 1 ? in.frames.back().time - in.frames.front().time : 0;
+    viewer->begin(pipe.skeleton(), pipe.joint_map(), in.have_truth ? &in.clip.skeleton : nullptr,
+                  static_cast<std::size_t>(seconds * fps) + 16);
+  }
   for (std::size_t i = 0; i < n; ++i) {
     const auto t0 = std::chrono::steady_clock::now();
     const int k = pipe.push(in.frames[i]);
@@ -100,6 +113,16 @@ std::optional<Metrics> stream(const Options& o, Input& in, Pipeline& pipe, Shown
       writer.add(pipe.pose(), 100.0 * user);
       const bool contact[2] = {pipe.contact(0), pipe.contact(1)};
       if (m) m->add(pipe.pose(), pipe.world(), user, shown_seconds(), contact);
+      if (viewer) {  // the trackers and clip frame of the time the pose shows (physics: 0.1 s back)
+        const double shown = shown_seconds();
+        const sb::trackers::TrackerFrame& trk = in.frames[static_cast<std::size_t>(frame_at(in, in.frames.front().time + shown))];
+        int gf = -1;
+        if (in.have_truth) {
+          gf = std::clamp(static_cast<int>(std::lround(shown / in.clip.frame_time)), 0, in.clip.frames - 1);
+          in.truth.at(gf);
+        }
+        viewer->add(pipe.world(), user, contact, trk, in.have_truth ? &in.truth.w : nullptr, gf);
+      }
     }
     if (!o.quiet && (i + 1) % report == 0)
       std::printf("  %3d%%  frame %zu/%zu, %ld model steps, contacts L %s R %s\n", static_cast<int>(100 * (i + 1) / n), i + 1, n,
@@ -112,6 +135,14 @@ std::optional<Metrics> stream(const Options& o, Input& in, Pipeline& pipe, Shown
   std::printf("speed   %.1f us per model step (whole pipeline, this run, including resampling)\n",
               1e6 * step_seconds / std::max(1L, steps));
   print_calibration(o, in, pipe);
+  if (viewer) {
+    nlohmann::json info = {{"input", o.input}, {"model", in.model}, {"fps", fps}, {"user_scale", pipe.user_scale()},
+                           {"us_per_step", 1e6 * step_seconds / std::max(1L, steps)},
+                           {"metrics", m ? nlohmann::json::parse(m->json()) : nlohmann::json(nullptr)}};
+    viewer->write(o.html, SPARSEBODY_VIEWER_TEMPLATE, o.three_js, info.dump());
+    std::printf("wrote   %s: browser page of %zu frames, %.2f MB (three.js %s inlined)\n", o.html.c_str(), viewer->frames(),
+                std::filesystem::file_size(o.html) / 1e6, o.three_js.c_str());
+  }
   return m;
 }
 

@@ -3,7 +3,7 @@
 //   sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p] [--no-pelvis]
 //                   [--weights FILE|DIR] [--mode streaming|window] [--no-contact-ik]
 //                   [--trackers-out trackers.csv] [--calibration-frame N] [--devices [--device-seed S]]
-//                   [--storage auto|float|f16|q8] [--physics] [--quiet]
+//                   [--storage auto|float|f16|q8] [--physics] [--html page.html [--three-js PATH]] [--quiet]
 //
 // Model choice (--model auto, the default): LoBSTr when the input has a pelvis tracker (it needs
 // one), Neural3Points (direct mode) when it has only the headset and controllers, which is what
@@ -37,6 +37,9 @@
 // session. --trackers-out writes the trackers used as such a CSV (from --devices: a device-
 // realistic session that the CSV path calibrates with its default options). The output BVH is the
 // standard skeleton at the user's size (the size the run ended with), in centimetres.
+//
+// --html writes one self-contained browser page of the run (three.js inlined, nothing fetched): the
+// avatar, the trackers, the clip side by side, contacts, floor and these metrics (demo_viewer.hpp).
 //
 // Files: this one (per-pipeline setup, model choice), demo_options (command line), demo_input (BVH
 // or CSV in, synthesised trackers, ground truth), demo_run (the frame loop every pipeline shares:
@@ -78,6 +81,7 @@ int run_lobstr(const Options& o, Input& in) {
   std::printf("model   LoBSTr %s: H=%d latent=%d, %s weights, %s mode%s, %.0f fps\n", o.weights.c_str(), Pipeline::kHidden,
               Pipeline::kLatent, o.storage.c_str(), mode.c_str(), o.contact_ik ? ", contact IK" : "", pipe.meta().frame_rate);
   print_credit(w->info().credit);
+  in.model = "LoBSTr H=" + std::to_string(Pipeline::kHidden) + ", " + o.storage + " weights, " + mode + (o.contact_ik ? ", contact IK" : "");
   const auto m = stream(o, in, pipe, [&] { return last_step_seconds(pipe); });
   if (m) m->print();
   return 0;
@@ -104,6 +108,7 @@ int run_n3p(const Options& o, Input& in) {
               Pipeline::kHiddenSignal, Pipeline::kHiddenLower, Pipeline::kHiddenUpper, o.storage.c_str(),
               o.contact_ik ? "foot-contact and hand IK" : "no IK", pipe.meta().frame_rate);
   print_credit(w.lo->info().credit);
+  in.model = "Neural3Points direct mode, " + o.storage + " weights" + (o.contact_ik ? ", foot-contact and hand IK" : "");
   const auto m = stream(o, in, pipe, [&] { return last_step_seconds(pipe); });
   if (m) m->print();
   return 0;
@@ -124,6 +129,7 @@ int run_n3p_physics(const Options& o, Input& in) {
               o.weights.c_str(), Direct::kHiddenSignal, Direct::kHiddenLower, Direct::kHiddenUpper, o.storage.c_str(),
               pipe.model().nb, pipe.model().nv, pipe.delay_seconds());
   print_credit(w.lo->info().credit);
+  in.model = "Neural3Points physics (normal) mode, " + o.storage + " weights, output 0.1 s behind the input";
   const double t0 = in.frames.front().time;  // the output is delayed: the time it shows, not the last step's
   const auto m = stream(o, in, pipe, [&] { return pipe.output_time() - t0; });
   const auto& r = pipe.residual_stats();
@@ -202,6 +208,7 @@ int run_lobstr_weights(Options& o, Input& in) {
 
 int main(int argc, char** argv) {
   Options o = parse_options(argc, argv);
+  if (!o.html.empty() && (o.three_js = find_three_js(o.three_js)).empty()) return 2;  // before the run, not after it
   try {
     Input in;
     read_input(o, in);
