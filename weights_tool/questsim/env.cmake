@@ -9,5 +9,5 @@ if(SPARSEBODY_BUILD_TESTS AND SPARSEBODY_PYTHON_TESTS)
   add_test(NAME training_env_pytest
            COMMAND ${SPARSEBODY_PYTHON} -m pytest -q -p no:cacheprovider weights_tool/questsim/test_env.py
            WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
-  set_tests_properties(training_env_pytest PROPERTIES ENVIRONMENT "SPARSEBODY_PYTHON_DIR=${SPARSEBODY_PYTHON_MODULE_DIR};MPLBACKEND=Agg")
+  set_tests_properties(training_env_pytest PROPERTIES ENVIRONMENT "SPARSEBODY_PYMOD_DIR=${SPARSEBODY_PYTHON_MODULE_DIR};MPLBACKEND=Agg")
 endif()
