@@ -87,3 +87,11 @@ def test_trainer_runs_one_update_resumes_and_exports(clip_paths, tmp_path):
     assert (tmp_path / "questsim_policy.json").stat().st_size > 1e6 and (tmp_path / "curve.png").exists()
     train.main(args[:-4] + ["--samples", "1280", "--motions", ".", "--resume"])
     assert len(open(tmp_path / "curve.csv").read().splitlines()) == 21  # continued, not restarted
+    # The exported file loads in the run-time pipeline, and the evaluation reads it (untrained: falls).
+    from . import evaluate
+    out = tmp_path / "eval.json"
+    evaluate.main([str(tmp_path / "questsim_policy.json"), d, "--motions", ".", "--json", str(out)])
+    import json
+    s = json.load(open(out))["summary"]
+    assert s["clips"] == 3 and np.isfinite(s["mpjpe_cm"]) and s["mpjpe_cm"] > 0 and s["residual_N"] == 0
+    assert s["mpjpe_cm"] <= s["mpjpe_output_cm"] + 5  # removing the latency does not make it much worse
