@@ -4,7 +4,8 @@ set -euo pipefail
 pkgs=(cmake g++ make libeigen3-dev libxsimd-dev nlohmann-json3-dev doctest-dev libbenchmark-dev
       python3-torch python3-numpy python3-pytest libopenblas0-pthread
       libtorch-dev libmujoco-dev assimp-testmodels clang libclang-rt-14-dev
-      g++-aarch64-linux-gnu qemu-user)  # the last two: ARM64 cross build + emulator (.ci/isa.sh)
+      g++-aarch64-linux-gnu qemu-user  # ARM64 cross build + emulator (.ci/isa.sh)
+      mono-mcs mono-runtime)           # the C# binding's test (tests/capi, capi_csharp)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -35,6 +35,7 @@ const std::map<std::string, int>& layer_rank() {
       {"control", 10},  // controllers, policies' inputs, fall detection
       {"avatar", 11},   // the pipelines: trackers in, a body out
       {"recordings", 12},  // BVH clips, tracker CSV sessions, tracker synthesis (files, training data)
+      {"c", 13},        // the C API over the pipelines (sparsebody.h and its one C++ implementation)
   };
   return r;
 }
