@@ -75,9 +75,10 @@ static class CSharpTest {
         if (!reference.TryGetValue(i, out want)) { Expect(false, name + ": frame " + i + " has a C# pose but no C++ pose"); continue; }
         Expect(want.Length == 3 * p.JointCount, name + ": joint count");
         for (int j = 0; j < p.JointCount; ++j) {
-          maxDiff = Math.Max(maxDiff, Math.Abs(pos[j].x - want[3 * j]));
-          maxDiff = Math.Max(maxDiff, Math.Abs(pos[j].y - want[3 * j + 1]));
-          maxDiff = Math.Max(maxDiff, Math.Abs(pos[j].z - want[3 * j + 2]));
+          // the reference holds floats printed with 9 digits: parsed back to the same float
+          maxDiff = Math.Max(maxDiff, Math.Abs(pos[j].x - (float)want[3 * j]));
+          maxDiff = Math.Max(maxDiff, Math.Abs(pos[j].y - (float)want[3 * j + 1]));
+          maxDiff = Math.Max(maxDiff, Math.Abs(pos[j].z - (float)want[3 * j + 2]));
         }
         ++compared;
       }

@@ -441,6 +441,8 @@ void check_parity(P& cpp, int kind) {
     bad += !same(info.root.position.x, float(r.x() * s)) + !same(info.root.position.y, float(r.y() * s)) +
            !same(info.root.position.z, float(r.z() * s));
     bad += !same(info.user_scale, float(s));
+    const auto& q0 = cpp.pose().local[0];
+    bad += !same(info.root.orientation.x, float(q0.x())) + !same(info.root.orientation.w, float(q0.w()));
     bad += (info.contact[0] != int(cpp.contact(0))) + (info.contact[1] != int(cpp.contact(1)));
     bad += info.frames != cpp.frames();
     bad += ((info.flags & SB_POSE_CALIBRATING) != 0) != (cpp.calibration_report().status != features::CalibrationStatus::Calibrated);
