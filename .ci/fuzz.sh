@@ -9,7 +9,7 @@ cd "$(dirname "$0")/.."
 SECONDS_EACH="${1:-60}"
 B=build-fuzz
 CXX=clang++ cmake -S . -B $B -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSPARSEBODY_FUZZ=ON -DSPARSEBODY_TEST_DIRS=fuzz \
-  -DSPARSEBODY_BUILD_BENCH=OFF -DSPARSEBODY_BUILD_EXAMPLES=OFF -DSPARSEBODY_NATIVE=OFF -DSPARSEBODY_INSTALL=OFF > /dev/null
+  -DSPARSEBODY_BUILD_BENCH=OFF -DSPARSEBODY_BUILD_EXAMPLES=OFF -DSPARSEBODY_NATIVE=OFF -DSPARSEBODY_INSTALL=OFF -DSPARSEBODY_BUILD_C_API=OFF > /dev/null
 cmake --build $B -j"$(nproc)"
 C=$B/corpus
 rm -rf $C; mkdir -p $C/weights_json $C/model_json $C/bvh $C/tracker_csv $C/pipelines $B/artifacts
