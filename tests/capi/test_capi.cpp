@@ -9,6 +9,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <random>
 #include <string>
 #include <thread>
 #include <vector>
@@ -540,4 +541,57 @@ TEST_CASE("one weights handle, pipelines on two threads: each equals a single-th
   REQUIRE(single.size() > 100);
   CHECK(a == single);
   CHECK(b == single);
+}
+
+// Hostile input through every pipeline (what tests/fuzz does to the C++ pipelines): random NaN, Inf,
+// huge values, non-unit quaternions, time going back and jumping, random validity bits, random
+// struct sizes. Every call returns a defined status and every pose read is finite.
+TEST_CASE("hostile frames: defined statuses, finite poses, no crash") {
+  std::mt19937 rng(12345);
+  std::uniform_real_distribution<float> u(-1, 1);
+  const float specials[] = {kNaN, std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(), 1e30f, -1e30f, 0.0f};
+  for (int kind : {SB_PIPELINE_LOBSTR, SB_PIPELINE_N3P_DIRECT, SB_PIPELINE_N3P_PHYSICS}) {
+    INFO("pipeline " << kind);
+    sb_pipeline* p = create(kind);
+    int32_t n = 0;
+    sb_pipeline_joint_count(p, &n);
+    std::vector<sb_quatf> rot(static_cast<std::size_t>(n));
+    std::vector<sb_vec3f> pos(static_cast<std::size_t>(n));
+    sb_pose_info info{};
+    info.struct_size = sizeof info;
+    double t = 0;
+    long poses = 0, nonfinite = 0, rejected = 0;
+    for (int i = 0; i < 3000; ++i) {
+      sb_tracker_frame f = capi_test::to_c(session()[static_cast<std::size_t>(i) % session().size()]);
+      const int what = static_cast<int>(rng() % 10);
+      t += what == 0 ? -0.5 : what == 1 ? 5.0 : 1.0 / 72;
+      f.time = t;
+      if (what == 2) f.valid = rng() % 16;
+      float* v = &f.pose[rng() % 4].orientation.x;
+      if (what == 3) v[rng() % 7] = specials[rng() % 6];
+      if (what == 4) v[rng() % 7] = 10 * u(rng);
+      if (what == 5) f.pose[0].position = {100 * u(rng), 100 * u(rng), 100 * u(rng)};
+      if (what == 6 && rng() % 8 == 0) f.struct_size = rng() % 256;
+      if (what == 7 && rng() % 8 == 0) f.time = specials[rng() % 3];
+      const sb_status s = sb_pipeline_push(p, &f, nullptr);
+      CHECK((s == SB_OK || s == SB_NONFINITE_POSE || s == SB_ERR_STRUCT_SIZE || s == SB_ERR_INVALID_ARGUMENT));
+      nonfinite += s == SB_NONFINITE_POSE;
+      rejected += s < 0;
+      if (what == 8) sb_pipeline_calibrate_frame(p, &f);
+      if (what == 9 && rng() % 50 == 0) sb_pipeline_recalibrate(p);
+      const sb_status r = sb_pipeline_read(p, &info, rot.data(), pos.data(), n);
+      REQUIRE((r == SB_OK || r == SB_NO_POSE || r == SB_ERR_ORDER));
+      if (r != SB_OK) continue;
+      ++poses;
+      bool finite = std::isfinite(info.root.position.x) && std::isfinite(info.root.position.y) && std::isfinite(info.root.orientation.w);
+      for (int j = 0; j < n; ++j)
+        finite = finite && std::isfinite(pos[static_cast<std::size_t>(j)].x) && std::isfinite(pos[static_cast<std::size_t>(j)].y) &&
+                 std::isfinite(pos[static_cast<std::size_t>(j)].z) && std::isfinite(rot[static_cast<std::size_t>(j)].w);
+      REQUIRE(finite);
+    }
+    CHECK(poses > 1000);
+    CHECK(nonfinite > 10);
+    CHECK(rejected > 5);
+    sb_pipeline_destroy(p);
+  }
 }

@@ -22,7 +22,8 @@
  * from it at once. An sb_pipeline is used by one thread at a time (no locks inside: serialise
  * yourself if you share one); it may move between threads. Different pipelines run in parallel.
  * sb_last_error(p) is valid until the next call on p; sb_last_error(NULL) until the next failing call
- * on this thread. Per frame (push, read, the queries) there is no allocation, no lock, no exception.
+ * on this thread. Per frame (push, read, the queries) there is no allocation, no lock, no exception
+ * (the C library's thread-local message buffer: the loader may allocate it on a thread's first error).
  *
  * Conventions (OpenXR): positions in metres, quaternions stored x y z w (XrPosef's layout: orientation
  * then position), right-handed, +Y up, -Z forward, floor at y = 0 (XR_REFERENCE_SPACE_TYPE_STAGE).
@@ -94,7 +95,7 @@ enum { SB_TRACKER_HEAD = 0, SB_TRACKER_LEFT_HAND = 1, SB_TRACKER_RIGHT_HAND = 2,
 
 /* sb_pose_info.flags */
 #define SB_POSE_OK 1u          /* a pose is available (what sb_pipeline_read copied) */
-#define SB_POSE_CALIBRATING 2u /* no calibration yet (default body) or the last one refused: searching */
+#define SB_POSE_CALIBRATING 2u /* not calibrated: the default body (searching, or auto_calibration 0), or refused */
 #define SB_POSE_RESET 4u       /* the model restarted during the last push (tracking gap, origin jump, start) */
 #define SB_POSE_FALLEN 8u      /* physics: the avatar fell during the last push and was reset to the prediction */
 
