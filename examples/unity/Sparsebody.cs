@@ -102,7 +102,11 @@ public class SparsebodyException : Exception {
 
 // The C entry points, one to one.
 public static class Native {
-  public const string Lib = "sparsebody_c";
+#if UNITY_IOS && !UNITY_EDITOR
+  public const string Lib = "__Internal";  // iOS links native plugins statically
+#else
+  public const string Lib = "sparsebody_c";  // libsparsebody_c.so / sparsebody_c.dll / libsparsebody_c.dylib
+#endif
   public const uint ApiVersion = 1;
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern uint sb_api_version();
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern IntPtr sb_last_error(IntPtr handle);
