@@ -6,7 +6,8 @@ pkgs=(cmake g++ make libeigen3-dev libxsimd-dev nlohmann-json3-dev doctest-dev l
       pybind11-dev python3-dev python3-matplotlib  # the Python module (weights_tool/native) and its plots
       libtorch-dev libmujoco-dev assimp-testmodels clang libclang-rt-14-dev
       g++-aarch64-linux-gnu qemu-user  # ARM64 cross build + emulator (.ci/isa.sh)
-      chromium libjs-three)  # sparsebody_demo --html and its browser test (tests/viewer)
+      chromium libjs-three  # sparsebody_demo --html and its browser test (tests/viewer)
+      mono-mcs mono-runtime)  # the C# binding's test (tests/capi, capi_csharp)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

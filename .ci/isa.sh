@@ -12,7 +12,8 @@ cd "$(dirname "$0")/.."
 jobs=$(nproc)
 common=(-DCMAKE_BUILD_TYPE=Release -DSPARSEBODY_BUILD_BENCH=OFF -DSPARSEBODY_BUILD_EXAMPLES=OFF
         -DSPARSEBODY_INSTALL=OFF "-DSPARSEBODY_TEST_DIRS=nn;determinism" -DSPARSEBODY_PYTHON_TESTS=OFF
-        -DSPARSEBODY_BUILD_PYTHON=OFF)
+        -DSPARSEBODY_BUILD_PYTHON=OFF
+        -DSPARSEBODY_BUILD_C_API=OFF)  # the C API library is built and tested by the main build (tests/capi)
 arm=(-DCMAKE_TOOLCHAIN_FILE=.ci/aarch64-linux-gnu.cmake)
 one() {
   local name=$1; shift

@@ -36,6 +36,7 @@ const std::map<std::string, int>& layer_rank() {
       {"avatar", 11},   // the pipelines: trackers in, a body out
       {"recordings", 12},  // BVH clips, tracker CSV sessions, tracker synthesis (files, training data)
       {"training", 13},    // training environments (reference motions, rewards) for the Python trainers
+      {"c", 14},        // the C API over the pipelines (sparsebody.h and its one C++ implementation)
   };
   return r;
 }

@@ -38,6 +38,8 @@ class PipelineFrontEnd {
   const pose::WorldPose& world() const noexcept { return out_.world(); }
   bool has_output() const noexcept { return out_.has_output(); }
   long long frames() const noexcept { return frames_; }  // model frames stepped since the last reset
+  // The resampler and sanitizer (last_sanitized().reset: the last tick restarted the model).
+  const trackers::TrackerStream& tracker_stream() const noexcept { return stream_; }
 
  protected:
   PipelineFrontEnd() = default;

@@ -42,6 +42,9 @@ class TrackerSanitizer {
     have_head_prev_ = false;
   }
 
+  // The last process() result (its reset flag: the C API's SB_POSE_RESET).
+  const SanitizedFrame& last() const noexcept { return out_; }
+
   // dt: model frame period (s). Returns the poses to feed forward.
   const SanitizedFrame& process(const TrackerFrame& in, double dt) noexcept {
     out_.reset = false;

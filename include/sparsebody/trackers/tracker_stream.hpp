@@ -33,6 +33,7 @@ class TrackerStream {
   }
 
   double period() const noexcept { return resampler_.period(); }
+  const SanitizedFrame& last_sanitized() const noexcept { return sanitizer_.last(); }
 
  private:
   Resampler resampler_;

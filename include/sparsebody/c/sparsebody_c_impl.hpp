@@ -1,0 +1,631 @@
+// The C API (sparsebody/c/sparsebody.h) implemented once, in C++17. The shared library sparsebody_c
+// is one TU including this; a user may compile it into one TU of their own instead (define
+// SPARSEBODY_C_STATIC for that TU and for every C file including the header).
+//
+// Handles are small structs (a tag, the last error, a pointer to the pipeline) allocated apart
+// from the pipeline, so a destroyed handle's memory stays small-bin heap: a stale pointer reads a
+// cleared tag (not an unmapped page). Every entry point catches everything: no exception crosses.
+// Per frame (push, read, queries): no allocation; messages go into fixed buffers (snprintf).
+// Builds: LoBSTr compact (H 256, latent 128), Neural3Points direct and physics (the paper's sizes),
+// float weights. QuestSim: SB_ERR_NO_TRAINED_WEIGHTS (only random test weights exist).
+#pragma once
+#include <cmath>
+#include <cstdarg>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <memory>
+#include <new>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <system_error>
+#include <type_traits>
+
+#include "sparsebody/avatar/lobstr_pipeline.hpp"
+#include "sparsebody/avatar/n3p_direct.hpp"
+#include "sparsebody/avatar/n3p_physics.hpp"
+#include "sparsebody/c/sparsebody.h"
+#include "sparsebody/core/error.hpp"
+#include "sparsebody/io/weights_json.hpp"
+
+namespace sparsebody::capi {
+
+inline constexpr std::uint64_t kWeightsTag = 0x5342574549474854ull;   // "SBWEIGHT"
+inline constexpr std::uint64_t kPipelineTag = 0x5342504950454c4eull;  // "SBPIPELN"
+inline constexpr std::uint64_t kDeadTag = 0x4445414444454144ull;      // written by destroy
+inline constexpr std::size_t kMessage = 256;
+
+using LoBSTr = avatar::LoBSTrCompact;
+using N3PDirect = avatar::N3PDirect;
+using N3PPhysics = avatar::N3PPhysicsDefaultSizes<float>;
+
+inline char* thread_message() noexcept {
+  static thread_local char m[kMessage] = "";
+  return m;
+}
+
+inline void vformat(char* dst, const char* fmt, va_list ap) noexcept { std::vsnprintf(dst, kMessage, fmt, ap); }
+
+// One abstract pipeline: the three builds behind one vtable (a virtual call per frame is noise).
+struct PipelineBase {
+  virtual ~PipelineBase() = default;
+  // One push; flags gets SB_POSE_RESET / SB_POSE_FALLEN, time the shown pose's input time.
+  virtual int push(const trackers::TrackerFrame& f, std::uint32_t& flags) noexcept = 0;
+  virtual bool has_output() const noexcept = 0;
+  virtual const pose::BodyPose& pose() const noexcept = 0;
+  virtual const pose::WorldPose& world() const noexcept = 0;
+  virtual const pose::Skeleton& skeleton() const noexcept = 0;
+  virtual double user_scale() const noexcept = 0;
+  virtual bool contact(int foot) const noexcept = 0;
+  virtual long long frames() const noexcept = 0;
+  virtual double shown_time() const noexcept = 0;
+  virtual double frame_rate() const noexcept = 0;
+  virtual const features::CalibrationReport& calibration_report() const noexcept = 0;
+  virtual bool calibrate(const trackers::TrackerFrame& f) noexcept = 0;
+  virtual void recalibrate() noexcept = 0;
+  virtual void set_joint_calibration(double scale) noexcept = 0;
+  virtual void reset() noexcept = 0;
+};
+
+template <class P>
+struct PipelineModel final : PipelineBase {
+  P p;
+  double time_ = std::numeric_limits<double>::quiet_NaN();
+  template <class W, class C>
+  PipelineModel(const W& w, const C& c) : p(w, c) {}
+
+  static constexpr bool kPhysics = std::is_same_v<P, N3PPhysics>;
+  const trackers::SanitizedFrame& sanitized() const noexcept {
+    if constexpr (kPhysics) return p.direct().tracker_stream().last_sanitized();
+    else return p.tracker_stream().last_sanitized();
+  }
+
+  int push(const trackers::TrackerFrame& f, std::uint32_t& flags) noexcept override {
+    bool reset = false;
+    long long falls = 0, restarts = 0;
+    if constexpr (kPhysics) falls = p.falls(), restarts = p.restarts();
+    const int k = p.push(f, [&](const trackers::TrackerFrame& tick, bool gap) {
+      reset = reset || gap || sanitized().reset;
+      time_ = tick.time;
+    });
+    flags = 0;
+    if constexpr (kPhysics) {
+      if (p.restarts() != restarts) reset = true;
+      if (p.falls() != falls) flags |= SB_POSE_FALLEN;
+    }
+    if (reset) flags |= SB_POSE_RESET;
+    return k;
+  }
+  bool has_output() const noexcept override { return p.has_output(); }
+  const pose::BodyPose& pose() const noexcept override { return p.pose(); }
+  const pose::WorldPose& world() const noexcept override { return p.world(); }
+  const pose::Skeleton& skeleton() const noexcept override { return p.skeleton(); }
+  double user_scale() const noexcept override { return p.user_scale(); }
+  bool contact(int foot) const noexcept override { return p.contact(foot); }
+  long long frames() const noexcept override { return p.frames(); }
+  double shown_time() const noexcept override {
+    if constexpr (kPhysics) return p.output_time();
+    else return time_;
+  }
+  double frame_rate() const noexcept override { return p.meta().frame_rate; }
+  const features::CalibrationReport& calibration_report() const noexcept override { return p.calibration_report(); }
+  bool calibrate(const trackers::TrackerFrame& f) noexcept override { return p.calibrate(f); }
+  void recalibrate() noexcept override { p.recalibrate(); }
+  void set_joint_calibration(double scale) noexcept override {
+    // the demo's BVH path: identity offsets (trackers at the joints), only the size
+    if constexpr (std::is_same_v<P, LoBSTr>) {
+      features::Calibration c;
+      c.scale = scale;
+      p.set_calibration(c);
+    } else {
+      features::n3p::N3PCalibration c;
+      c.base.scale = scale;
+      p.set_calibration(c);
+    }
+  }
+  void reset() noexcept override {
+    p.reset();
+    time_ = std::numeric_limits<double>::quiet_NaN();
+  }
+};
+
+}  // namespace sparsebody::capi
+
+struct sb_weights {
+  std::uint64_t tag = sparsebody::capi::kWeightsTag;
+  std::int32_t model = 0;
+  std::shared_ptr<const sparsebody::capi::LoBSTr::Weights> lobstr;
+  sparsebody::capi::N3PDirect::Weights n3p;
+  char error[sparsebody::capi::kMessage] = "";
+};
+
+struct sb_pipeline {
+  std::uint64_t tag = sparsebody::capi::kPipelineTag;
+  std::int32_t kind = 0;
+  bool pushed = false;  // a push since create/reset: reading before it is SB_ERR_ORDER
+  std::uint32_t flags = 0;
+  std::int32_t steps = 0;
+  std::unique_ptr<sparsebody::capi::PipelineBase> impl;
+  char error[sparsebody::capi::kMessage] = "";
+};
+
+namespace sparsebody::capi {
+
+// The status with its message in the handle's buffer (when there is one) and this thread's.
+inline sb_status fail(char* handle_msg, sb_status s, const char* fmt, ...) noexcept {
+  va_list ap;
+  va_start(ap, fmt);
+  char* t = thread_message();
+  vformat(t, fmt, ap);
+  va_end(ap);
+  if (handle_msg && handle_msg != t) std::memcpy(handle_msg, t, kMessage);
+  return s;
+}
+
+// Reading the tag of a pointer that is not a handle is the one unchecked step (documented).
+template <class H>
+bool live(const H* h, std::uint64_t tag) noexcept {
+  return h && reinterpret_cast<std::uintptr_t>(h) % alignof(std::uint64_t) == 0 && *reinterpret_cast<const std::uint64_t*>(h) == tag;
+}
+
+#define SB_CHECK_PIPELINE(p)                                                                                \
+  do {                                                                                                      \
+    if (!(p)) return ::sparsebody::capi::fail(nullptr, SB_ERR_NULL, "%s: pipeline is NULL", __func__);     \
+    if (!::sparsebody::capi::live(p, ::sparsebody::capi::kPipelineTag))                                     \
+      return ::sparsebody::capi::fail(nullptr, SB_ERR_BAD_HANDLE, "%s: not a live sb_pipeline (foreign or destroyed)", __func__); \
+  } while (0)
+
+#define SB_CATCH_ALL(msg)                                                                                 \
+  catch (const std::bad_alloc&) {                                                                         \
+    return ::sparsebody::capi::fail(msg, SB_ERR_OUT_OF_MEMORY, "%s: out of memory", __func__);             \
+  }                                                                                                       \
+  catch (const ::sparsebody::LoadError& e) {                                                              \
+    return ::sparsebody::capi::fail(msg, SB_ERR_LOAD, "%s", e.what());                                     \
+  }                                                                                                       \
+  catch (const std::exception& e) {                                                                       \
+    return ::sparsebody::capi::fail(msg, SB_ERR_INTERNAL, "%s: %s", __func__, e.what());                   \
+  }                                                                                                       \
+  catch (...) {                                                                                           \
+    return ::sparsebody::capi::fail(msg, SB_ERR_INTERNAL, "%s: unknown exception", __func__);              \
+  }
+
+inline bool finite_pose(const sb_posef& p) noexcept {
+  const float v[7] = {p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w, p.position.x, p.position.y, p.position.z};
+  for (float x : v)
+    if (!std::isfinite(x)) return false;
+  return true;
+}
+
+// The C frame as the pipelines' TrackerFrame (same numbers: the pipeline sees what C++ callers pass).
+inline trackers::TrackerFrame to_frame(const sb_tracker_frame& f) noexcept {
+  trackers::TrackerFrame t;
+  t.time = f.time;
+  for (int k = 0; k < trackers::kTrackerCount; ++k) {
+    const sb_posef& p = f.pose[k];
+    t.pose[k].orientation = {p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w};
+    t.pose[k].position = {p.position.x, p.position.y, p.position.z};
+    t.valid[k] = (f.valid >> k) & 1u;
+  }
+  return t;
+}
+
+// Checks shared by push and calibrate_frame; SB_OK or an error with the message set.
+inline sb_status check_frame(char* msg, const char* fn, const sb_tracker_frame* f) noexcept {
+  if (!f) return fail(msg, SB_ERR_NULL, "%s: frame is NULL", fn);
+  if (f->struct_size != sizeof(sb_tracker_frame))
+    return fail(msg, SB_ERR_STRUCT_SIZE, "%s: frame struct_size %u, expected %u", fn, f->struct_size, unsigned(sizeof(sb_tracker_frame)));
+  if (!std::isfinite(f->time)) return fail(msg, SB_ERR_INVALID_ARGUMENT, "%s: frame time is not finite", fn);
+  if (f->valid & ~0xFu) return fail(msg, SB_ERR_INVALID_ARGUMENT, "%s: valid has bits beyond SB_VALID_PELVIS (0x%x)", fn, f->valid);
+  return SB_OK;
+}
+
+inline bool is_dir(const char* path) noexcept {
+  std::error_code ec;
+  return std::filesystem::is_directory(path, ec);
+}
+
+// Loads and checks N3P weights by building one pipeline (its constructor validates the skeleton).
+inline void load_n3p(sb_weights& w, const std::string& sig, const std::string& lo, const std::string& up) {
+  using Pred = N3PDirect::Predictor;
+  w.n3p.sig = nn::NetworkWeights<Pred::SigNet>::load(sig, networks::kN3PSignalKind);
+  w.n3p.lo = nn::NetworkWeights<Pred::LoNet>::load(lo, networks::kN3PLowerKind);
+  w.n3p.up = nn::NetworkWeights<Pred::UpNet>::load(up, networks::kN3PUpperKind);
+  N3PDirect check(w.n3p);
+  (void)check;
+}
+
+}  // namespace sparsebody::capi
+
+extern "C" {
+
+SPARSEBODY_API uint32_t sb_api_version(void) { return SB_API_VERSION; }
+
+SPARSEBODY_API const char* sb_status_name(sb_status s) {
+  switch (s) {
+    case SB_OK: return "SB_OK";
+    case SB_NO_POSE: return "SB_NO_POSE";
+    case SB_NONFINITE_POSE: return "SB_NONFINITE_POSE";
+    case SB_ERR_NULL: return "SB_ERR_NULL";
+    case SB_ERR_BAD_HANDLE: return "SB_ERR_BAD_HANDLE";
+    case SB_ERR_STRUCT_SIZE: return "SB_ERR_STRUCT_SIZE";
+    case SB_ERR_INVALID_ARGUMENT: return "SB_ERR_INVALID_ARGUMENT";
+    case SB_ERR_CAPACITY: return "SB_ERR_CAPACITY";
+    case SB_ERR_ORDER: return "SB_ERR_ORDER";
+    case SB_ERR_LOAD: return "SB_ERR_LOAD";
+    case SB_ERR_NO_TRAINED_WEIGHTS: return "SB_ERR_NO_TRAINED_WEIGHTS";
+    case SB_ERR_UNSUPPORTED: return "SB_ERR_UNSUPPORTED";
+    case SB_ERR_MISMATCH: return "SB_ERR_MISMATCH";
+    case SB_ERR_OUT_OF_MEMORY: return "SB_ERR_OUT_OF_MEMORY";
+    case SB_ERR_INTERNAL: return "SB_ERR_INTERNAL";
+  }
+  return "unknown";
+}
+
+SPARSEBODY_API const char* sb_last_error(const void* handle) {
+  namespace c = sparsebody::capi;
+  if (c::live(static_cast<const sb_pipeline*>(handle), c::kPipelineTag)) return static_cast<const sb_pipeline*>(handle)->error;
+  if (c::live(static_cast<const sb_weights*>(handle), c::kWeightsTag)) return static_cast<const sb_weights*>(handle)->error;
+  return c::thread_message();
+}
+
+SPARSEBODY_API sb_status sb_weights_load(int32_t model, const char* path, sb_weights** out) {
+  namespace c = sparsebody::capi;
+  if (!out) return c::fail(nullptr, SB_ERR_NULL, "sb_weights_load: out is NULL");
+  *out = nullptr;
+  if (!path) return c::fail(nullptr, SB_ERR_NULL, "sb_weights_load: path is NULL");
+  try {
+    if (model == SB_MODEL_QUESTSIM)
+      return c::fail(nullptr, SB_ERR_NO_TRAINED_WEIGHTS, "sb_weights_load: QuestSim has no trained weights (only random test weights exist)");
+    if (model != SB_MODEL_LOBSTR && model != SB_MODEL_N3P)
+      return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_weights_load: unknown model %d", int(model));
+    auto w = std::make_unique<sb_weights>();
+    w->model = model;
+    if (model == SB_MODEL_LOBSTR) {
+      // the sizes from the file's meta first, as the demo does: a clear message for other builds
+      const sparsebody::io::WeightsDocument doc = sparsebody::io::read_weights_file(path);
+      const auto& meta = doc.info.meta;
+      auto size_of = [&](const char* key, int def) {
+        return meta.contains(key) && meta[key].is_number_integer() ? meta[key].get<int>() : def;
+      };
+      const int hidden = size_of("hidden", 256), latent = size_of("latent", 128);
+      if (hidden != c::LoBSTr::kHidden || latent != c::LoBSTr::kLatent)
+        return c::fail(nullptr, SB_ERR_UNSUPPORTED, "%s: LoBSTr H=%d latent=%d; this build has H=%d latent=%d only", path, hidden, latent,
+                       c::LoBSTr::kHidden, c::LoBSTr::kLatent);
+      w->lobstr = c::LoBSTr::load(path);
+    } else {
+      std::string p = path;
+      if (c::is_dir(path)) p += "/n3p";
+      for (const char* suffix : {"_signal.json", "_lower.json", "_upper.json"}) {
+        const std::size_t n = std::strlen(suffix);
+        if (p.size() > n && p.compare(p.size() - n, n, suffix) == 0) {
+          p.resize(p.size() - n);
+          break;
+        }
+      }
+      c::load_n3p(*w, p + "_signal.json", p + "_lower.json", p + "_upper.json");
+    }
+    *out = w.release();
+    return SB_OK;
+  }
+  SB_CATCH_ALL(nullptr)
+}
+
+SPARSEBODY_API sb_status sb_weights_load_n3p(const char* upper, const char* lower, const char* signal, sb_weights** out) {
+  namespace c = sparsebody::capi;
+  if (!out) return c::fail(nullptr, SB_ERR_NULL, "sb_weights_load_n3p: out is NULL");
+  *out = nullptr;
+  if (!upper || !lower || !signal) return c::fail(nullptr, SB_ERR_NULL, "sb_weights_load_n3p: a path is NULL");
+  try {
+    auto w = std::make_unique<sb_weights>();
+    w->model = SB_MODEL_N3P;
+    c::load_n3p(*w, signal, lower, upper);
+    *out = w.release();
+    return SB_OK;
+  }
+  SB_CATCH_ALL(nullptr)
+}
+
+SPARSEBODY_API sb_status sb_weights_model(const sb_weights* w, int32_t* model) {
+  namespace c = sparsebody::capi;
+  if (!w) return c::fail(nullptr, SB_ERR_NULL, "sb_weights_model: weights is NULL");
+  if (!c::live(w, c::kWeightsTag)) return c::fail(nullptr, SB_ERR_BAD_HANDLE, "sb_weights_model: not a live sb_weights");
+  if (!model) return c::fail(nullptr, SB_ERR_NULL, "sb_weights_model: model is NULL");
+  *model = w->model;
+  return SB_OK;
+}
+
+SPARSEBODY_API sb_status sb_weights_destroy(sb_weights* w) {
+  namespace c = sparsebody::capi;
+  if (!w) return SB_OK;
+  if (!c::live(w, c::kWeightsTag)) return c::fail(nullptr, SB_ERR_BAD_HANDLE, "sb_weights_destroy: not a live sb_weights (foreign or destroyed)");
+  try {
+    w->tag = c::kDeadTag;
+    delete w;
+    return SB_OK;
+  }
+  SB_CATCH_ALL(nullptr)
+}
+
+SPARSEBODY_API sb_status sb_pipeline_config_init(sb_pipeline_config* cfg, int32_t pipeline) {
+  namespace c = sparsebody::capi;
+  if (!cfg) return c::fail(nullptr, SB_ERR_NULL, "sb_pipeline_config_init: cfg is NULL");
+  if (pipeline < SB_PIPELINE_LOBSTR || pipeline > SB_PIPELINE_QUESTSIM)
+    return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_pipeline_config_init: unknown pipeline %d", int(pipeline));
+  *cfg = sb_pipeline_config{};
+  cfg->struct_size = sizeof(sb_pipeline_config);
+  cfg->version = SB_API_VERSION;
+  cfg->pipeline = pipeline;
+  cfg->auto_calibration = 1;
+  cfg->contact_ik = 1;
+  cfg->window_mode = 0;
+  return SB_OK;
+}
+
+SPARSEBODY_API sb_status sb_pipeline_create(const sb_weights* w, const sb_pipeline_config* cfg, sb_pipeline** out) {
+  namespace c = sparsebody::capi;
+  namespace a = sparsebody::avatar;
+  if (!out) return c::fail(nullptr, SB_ERR_NULL, "sb_pipeline_create: out is NULL");
+  *out = nullptr;
+  if (!w || !cfg) return c::fail(nullptr, SB_ERR_NULL, "sb_pipeline_create: %s is NULL", w ? "cfg" : "weights");
+  if (!c::live(w, c::kWeightsTag)) return c::fail(nullptr, SB_ERR_BAD_HANDLE, "sb_pipeline_create: not a live sb_weights (foreign or destroyed)");
+  if (cfg->struct_size != sizeof(sb_pipeline_config))
+    return c::fail(nullptr, SB_ERR_STRUCT_SIZE, "sb_pipeline_create: cfg struct_size %u, expected %u", cfg->struct_size,
+                   unsigned(sizeof(sb_pipeline_config)));
+  if (cfg->version != SB_API_VERSION)
+    return c::fail(nullptr, SB_ERR_STRUCT_SIZE, "sb_pipeline_create: cfg version %u, this library is %u", cfg->version, SB_API_VERSION);
+  const int kind = cfg->pipeline;
+  if (kind == SB_PIPELINE_QUESTSIM)
+    return c::fail(nullptr, SB_ERR_NO_TRAINED_WEIGHTS, "sb_pipeline_create: QuestSim has no trained policy (only random test weights exist)");
+  if (kind < SB_PIPELINE_LOBSTR || kind > SB_PIPELINE_N3P_PHYSICS)
+    return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_pipeline_create: unknown pipeline %d", kind);
+  for (int32_t v : {cfg->auto_calibration, cfg->contact_ik, cfg->window_mode})
+    if (v != 0 && v != 1) return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_pipeline_create: a flag of cfg is %d, not 0 or 1", int(v));
+  if (cfg->window_mode && kind != SB_PIPELINE_LOBSTR)
+    return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_pipeline_create: window_mode is LoBSTr-only");
+  const int need = kind == SB_PIPELINE_LOBSTR ? SB_MODEL_LOBSTR : SB_MODEL_N3P;
+  if (w->model != need)
+    return c::fail(nullptr, SB_ERR_MISMATCH, "sb_pipeline_create: this pipeline needs %s weights, got %s",
+                   need == SB_MODEL_LOBSTR ? "LoBSTr" : "Neural3Points", w->model == SB_MODEL_LOBSTR ? "LoBSTr" : "Neural3Points");
+  try {
+    auto h = std::make_unique<sb_pipeline>();
+    h->kind = kind;
+    if (kind == SB_PIPELINE_LOBSTR) {
+      a::LoBSTrConfig pc;
+      pc.mode = cfg->window_mode ? a::RunMode::Window : a::RunMode::Streaming;
+      pc.contact_ik = cfg->contact_ik != 0;
+      pc.calibration.enabled = cfg->auto_calibration != 0;
+      h->impl = std::make_unique<c::PipelineModel<c::LoBSTr>>(w->lobstr, pc);
+    } else if (kind == SB_PIPELINE_N3P_DIRECT) {
+      a::N3PConfig pc;
+      pc.foot_ik = cfg->contact_ik != 0;
+      pc.calibration.enabled = cfg->auto_calibration != 0;
+      h->impl = std::make_unique<c::PipelineModel<c::N3PDirect>>(w->n3p, pc);
+    } else {
+      a::N3PPhysicsConfig pc;
+      pc.direct.foot_ik = cfg->contact_ik != 0;
+      pc.direct.calibration.enabled = cfg->auto_calibration != 0;
+      h->impl = std::make_unique<c::PipelineModel<c::N3PPhysics>>(w->n3p, pc);
+    }
+    *out = h.release();
+    return SB_OK;
+  }
+  SB_CATCH_ALL(nullptr)
+}
+
+SPARSEBODY_API sb_status sb_pipeline_destroy(sb_pipeline* p) {
+  namespace c = sparsebody::capi;
+  if (!p) return SB_OK;
+  SB_CHECK_PIPELINE(p);
+  try {
+    p->tag = c::kDeadTag;
+    delete p;
+    return SB_OK;
+  }
+  SB_CATCH_ALL(nullptr)
+}
+
+SPARSEBODY_API sb_status sb_pipeline_reset(sb_pipeline* p) {
+  SB_CHECK_PIPELINE(p);
+  try {
+  p->impl->reset();
+  p->pushed = false;
+  p->flags = 0;
+  p->steps = 0;
+  return SB_OK;
+  }
+  SB_CATCH_ALL(p->error)
+}
+
+SPARSEBODY_API sb_status sb_pipeline_push(sb_pipeline* p, const sb_tracker_frame* frame, int32_t* steps) {
+  namespace c = sparsebody::capi;
+  SB_CHECK_PIPELINE(p);
+  try {
+  if (const sb_status s = c::check_frame(p->error, "sb_pipeline_push", frame); s != SB_OK) return s;
+  int bad = -1;  // a valid tracker with NaN/Inf: used as lost (the sanitizer's rule), said here
+  for (int k = 0; k < SB_TRACKER_COUNT; ++k)
+    if (((frame->valid >> k) & 1u) && !c::finite_pose(frame->pose[k])) {
+      bad = k;
+      break;
+    }
+  const int k = p->impl->push(c::to_frame(*frame), p->flags);
+  p->steps = k;
+  p->pushed = true;
+  if (steps) *steps = k;
+  if (bad >= 0)
+    return c::fail(p->error, SB_NONFINITE_POSE, "sb_pipeline_push: tracker %d (%s) is flagged valid but not finite: treated as lost", bad,
+                   sparsebody::trackers::tracker_name(bad));
+  return SB_OK;
+  }
+  SB_CATCH_ALL(p->error)
+}
+
+SPARSEBODY_API sb_status sb_pipeline_read(sb_pipeline* p, sb_pose_info* info, sb_quatf* local_rotations, sb_vec3f* world_positions,
+                                          int32_t capacity) {
+  namespace c = sparsebody::capi;
+  SB_CHECK_PIPELINE(p);
+  try {
+  if (!info) return c::fail(p->error, SB_ERR_NULL, "sb_pipeline_read: info is NULL");
+  if (info->struct_size != sizeof(sb_pose_info))
+    return c::fail(p->error, SB_ERR_STRUCT_SIZE, "sb_pipeline_read: info struct_size %u, expected %u", info->struct_size,
+                   unsigned(sizeof(sb_pose_info)));
+  const c::PipelineBase& q = *p->impl;
+  const int n = q.skeleton().size();
+  if ((local_rotations || world_positions) && capacity < n)
+    return c::fail(p->error, SB_ERR_CAPACITY, "sb_pipeline_read: capacity %d, the skeleton has %d joints", int(capacity), n);
+  if (!p->pushed) return c::fail(p->error, SB_ERR_ORDER, "sb_pipeline_read: no frame pushed yet (since create or reset)");
+  const double s = q.user_scale();
+  std::uint32_t flags = p->flags;
+  if (q.calibration_report().status != sparsebody::features::CalibrationStatus::Calibrated) flags |= SB_POSE_CALIBRATING;
+  const bool ok = q.has_output();
+  if (ok) flags |= SB_POSE_OK;
+  const std::uint32_t size = info->struct_size;
+  *info = sb_pose_info{};
+  info->struct_size = size;
+  info->flags = flags;
+  info->time = q.shown_time();
+  info->frames = q.frames();
+  info->steps = p->steps;
+  info->joint_count = n;
+  info->user_scale = static_cast<float>(s);
+  info->contact[0] = q.contact(0);
+  info->contact[1] = q.contact(1);
+  if (!ok) return c::fail(p->error, SB_NO_POSE, "sb_pipeline_read: no pose yet (no valid headset frame so far)");
+  const auto& pose = q.pose();
+  const auto& world = q.world();
+  const Eigen::Quaterniond& r = pose.local[0];
+  info->root.orientation = {float(r.x()), float(r.y()), float(r.z()), float(r.w())};
+  info->root.position = {float(pose.root_position.x() * s), float(pose.root_position.y() * s), float(pose.root_position.z() * s)};
+  if (local_rotations)
+    for (int j = 0; j < n; ++j) {
+      const Eigen::Quaterniond& l = pose.local[static_cast<std::size_t>(j)];
+      local_rotations[j] = {float(l.x()), float(l.y()), float(l.z()), float(l.w())};
+    }
+  if (world_positions)
+    for (int j = 0; j < n; ++j) {
+      const Eigen::Vector3d& w = world.position[static_cast<std::size_t>(j)];
+      world_positions[j] = {float(w.x() * s), float(w.y() * s), float(w.z() * s)};
+    }
+  return SB_OK;
+  }
+  SB_CATCH_ALL(p->error)
+}
+
+SPARSEBODY_API sb_status sb_pipeline_joint_count(sb_pipeline* p, int32_t* count) {
+  namespace c = sparsebody::capi;
+  SB_CHECK_PIPELINE(p);
+  try {
+  if (!count) return c::fail(p->error, SB_ERR_NULL, "sb_pipeline_joint_count: count is NULL");
+  *count = p->impl->skeleton().size();
+  return SB_OK;
+  }
+  SB_CATCH_ALL(p->error)
+}
+
+SPARSEBODY_API sb_status sb_pipeline_joint_name(sb_pipeline* p, int32_t joint, const char** name) {
+  namespace c = sparsebody::capi;
+  SB_CHECK_PIPELINE(p);
+  try {
+  if (!name) return c::fail(p->error, SB_ERR_NULL, "sb_pipeline_joint_name: name is NULL");
+  *name = nullptr;
+  const auto& s = p->impl->skeleton();
+  if (joint < 0 || joint >= s.size())
+    return c::fail(p->error, SB_ERR_INVALID_ARGUMENT, "sb_pipeline_joint_name: joint %d outside 0-%d", int(joint), s.size() - 1);
+  *name = s.names[static_cast<std::size_t>(joint)].c_str();
+  return SB_OK;
+  }
+  SB_CATCH_ALL(p->error)
+}
+
+SPARSEBODY_API sb_status sb_pipeline_joint_parents(sb_pipeline* p, int32_t* parents, int32_t capacity) {
+  namespace c = sparsebody::capi;
+  SB_CHECK_PIPELINE(p);
+  try {
+  if (!parents) return c::fail(p->error, SB_ERR_NULL, "sb_pipeline_joint_parents: parents is NULL");
+  const auto& s = p->impl->skeleton();
+  if (capacity < s.size())
+    return c::fail(p->error, SB_ERR_CAPACITY, "sb_pipeline_joint_parents: capacity %d, the skeleton has %d joints", int(capacity), s.size());
+  for (int j = 0; j < s.size(); ++j) parents[j] = s.parents[static_cast<std::size_t>(j)];
+  return SB_OK;
+  }
+  SB_CATCH_ALL(p->error)
+}
+
+SPARSEBODY_API sb_status sb_pipeline_frame_rate(sb_pipeline* p, double* fps) {
+  namespace c = sparsebody::capi;
+  SB_CHECK_PIPELINE(p);
+  try {
+  if (!fps) return c::fail(p->error, SB_ERR_NULL, "sb_pipeline_frame_rate: fps is NULL");
+  *fps = p->impl->frame_rate();
+  return SB_OK;
+  }
+  SB_CATCH_ALL(p->error)
+}
+
+SPARSEBODY_API sb_status sb_pipeline_recalibrate(sb_pipeline* p) {
+  SB_CHECK_PIPELINE(p);
+  try {
+  p->impl->recalibrate();
+  return SB_OK;
+  }
+  SB_CATCH_ALL(p->error)
+}
+
+SPARSEBODY_API sb_status sb_pipeline_calibrate_frame(sb_pipeline* p, const sb_tracker_frame* frame) {
+  namespace c = sparsebody::capi;
+  SB_CHECK_PIPELINE(p);
+  try {
+  if (const sb_status s = c::check_frame(p->error, "sb_pipeline_calibrate_frame", frame); s != SB_OK) return s;
+  if (!(frame->valid & SB_VALID_HEAD) || !c::finite_pose(frame->pose[0]) || !p->impl->calibrate(c::to_frame(*frame)))
+    return c::fail(p->error, SB_ERR_INVALID_ARGUMENT, "sb_pipeline_calibrate_frame: the frame cannot be used (headset invalid, not finite or too low)");
+  return SB_OK;
+  }
+  SB_CATCH_ALL(p->error)
+}
+
+SPARSEBODY_API sb_status sb_pipeline_set_joint_calibration(sb_pipeline* p, double scale) {
+  namespace c = sparsebody::capi;
+  SB_CHECK_PIPELINE(p);
+  try {
+  if (!(scale > 0.1 && scale < 10.0))  // NaN fails too
+    return c::fail(p->error, SB_ERR_INVALID_ARGUMENT, "sb_pipeline_set_joint_calibration: scale %g outside (0.1, 10)", scale);
+  p->impl->set_joint_calibration(scale);
+  return SB_OK;
+  }
+  SB_CATCH_ALL(p->error)
+}
+
+SPARSEBODY_API sb_status sb_pipeline_calibration(sb_pipeline* p, sb_calibration_report* report) {
+  namespace c = sparsebody::capi;
+  SB_CHECK_PIPELINE(p);
+  try {
+  if (!report) return c::fail(p->error, SB_ERR_NULL, "sb_pipeline_calibration: report is NULL");
+  if (report->struct_size != sizeof(sb_calibration_report))
+    return c::fail(p->error, SB_ERR_STRUCT_SIZE, "sb_pipeline_calibration: report struct_size %u, expected %u", report->struct_size,
+                   unsigned(sizeof(sb_calibration_report)));
+  const auto& r = p->impl->calibration_report();
+  const std::uint32_t size = report->struct_size;
+  *report = sb_calibration_report{};
+  report->struct_size = size;
+  report->state = static_cast<int32_t>(r.status);
+  report->source = static_cast<int32_t>(r.source);
+  report->windows = r.windows;
+  report->frames_used = r.first_frame >= 0 && r.last_frame >= r.first_frame ? r.last_frame - r.first_frame + 1 : 0;
+  report->stature = r.stature;
+  report->eye_height = r.eye_height;
+  report->scale = r.scale;
+  report->floor = r.floor;
+  report->confidence = r.confidence;
+  report->first_time = r.first_time;
+  report->last_time = r.last_time;
+  std::snprintf(report->message, sizeof report->message, "%s", r.message);
+  return SB_OK;
+  }
+  SB_CATCH_ALL(p->error)
+}
+
+}  // extern "C"
+
+#undef SB_CHECK_PIPELINE
+#undef SB_CATCH_ALL
