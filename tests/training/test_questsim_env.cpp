@@ -223,3 +223,24 @@ TEST_CASE("QuestSim reward: 1 for a perfect match; one joint off by d gives exp(
   r = training::questsim_reward(m, a, q, v, b, q, v, {400, 300}, {600, 300}, cfg);
   CHECK(r.r[4] == doctest::Approx(1.0));
 }
+
+TEST_CASE("QuestSim env: the privileged expert tracks the reference better than zero torques (residual on)") {
+  auto mean_reward = [](bool expert) {
+    training::QuestSimEnvConfig cfg;
+    cfg.residual_max_force = 1000;
+    cfg.residual_max_torque = 300;
+    Env env(clips(), meta(), std::vector<double>(4, 1.75), 8, cfg);
+    std::vector<float> act(std::size_t(4) * Env::kActionSize, 0.f);
+    double r = 0;
+    for (int t = 0; t < 72; ++t) {
+      if (expert) std::copy(env.expert_actions(), env.expert_actions() + act.size(), act.begin());
+      for (float a : act) REQUIRE(std::abs(a) <= 1.f);
+      env.step(act.data());
+      for (int i = 0; i < 4; ++i) r += env.rewards()[i] / (4 * 72);
+    }
+    return r;
+  };
+  const double zero = mean_reward(false), expert = mean_reward(true);
+  MESSAGE("mean reward over 2 s: zero torques " << zero << ", expert " << expert);
+  CHECK(expert > zero + 0.02);  // measured 0.49 vs 0.45 here; 0.47 vs 0.31 on 40 training clips
+}

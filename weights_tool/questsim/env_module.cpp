@@ -57,6 +57,7 @@ PYBIND11_MODULE(_questsim_env, m) {
       .def(py::init<>())
       .def_readwrite("max_head_error", &training::QuestSimEnvConfig::max_head_error)
       .def_readwrite("max_episode_steps", &training::QuestSimEnvConfig::max_episode_steps)
+      .def_readwrite("expert_wn", &training::QuestSimEnvConfig::expert_wn)
       .def_readwrite("residual_max_force", &training::QuestSimEnvConfig::residual_max_force)
       .def_readwrite("residual_max_torque", &training::QuestSimEnvConfig::residual_max_torque)
       .def_property("reward_mean_over_joints", [](const training::QuestSimEnvConfig& c) { return c.reward.mean_over_joints; },
@@ -89,6 +90,10 @@ PYBIND11_MODULE(_questsim_env, m) {
         Env& e = self.cast<Env&>();
         return view(self, const_cast<float*>(e.reward_terms()), {e.size(), 5});
       })
+      .def_property_readonly("expert_actions", [](py::object self) {
+        Env& e = self.cast<Env&>();
+        return view(self, const_cast<float*>(e.expert_actions()), {e.size(), Env::kActionSize});
+      })
       .def_property_readonly("terminated", [](py::object self) {
         Env& e = self.cast<Env&>();
         return view(self, const_cast<unsigned char*>(e.terminated()), {e.size()});
@@ -111,6 +116,14 @@ PYBIND11_MODULE(_questsim_env, m) {
       .def("frame", &Env::frame)
       .def("episode_step", &Env::episode_step)
       .def("residual_force", &Env::root_residual_force)
+      .def("q", [](const Env& e, int i) {
+        const auto& q = e.simulator(i).q();
+        return std::vector<double>(q.data(), q.data() + q.size());
+      })
+      .def("reference_q", [](const Env& e, int i) {
+        const auto& q = e.reference_q(i);
+        return std::vector<double>(q.data(), q.data() + q.size());
+      })
       .def("sensor_positions", [](const Env& e, int i) {
         py::array_t<double> out({3, 3});
         auto r = out.mutable_unchecked<2>();

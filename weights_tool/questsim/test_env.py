@@ -87,6 +87,10 @@ def test_trainer_runs_one_update_resumes_and_exports(clip_paths, tmp_path):
     assert (tmp_path / "questsim_policy.json").stat().st_size > 1e6 and (tmp_path / "curve.png").exists()
     train.main(args[:-4] + ["--samples", "1280", "--motions", ".", "--resume"])
     assert len(open(tmp_path / "curve.csv").read().splitlines()) == 21  # continued, not restarted
+    dag = tmp_path / "dagger"
+    train.main([d, "--out", str(dag), "--envs", "8", "--horizon", "8", "--samples", "640", "--motions", ".",
+                "--bc-iters", "5"])
+    assert len(open(dag / "curve.csv").read().splitlines()) == 11
     # The exported file loads in the run-time pipeline, and the evaluation reads it (untrained: falls).
     from . import evaluate
     out = tmp_path / "eval.json"

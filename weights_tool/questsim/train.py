@@ -12,6 +12,11 @@ helps the character stay up early and is annealed to zero (--residual-force N ov
 --residual-anneal samples); the shipped policy is measured with it off.
 Exploration noise: a learned state-independent log std, started at --init-std (the paper's fixed
 0.03 needs its 14 billion steps).
+Warm start (--bc-iters K): the first K updates are DAgger (Ross et al. 2011) on the environment's
+privileged expert (computed-torque tracking of the reference, questsim_env.hpp): each step a
+character executes the expert's action with probability beta (1 -> 0 over the K updates), else the
+policy's sample; the policy regresses the expert's action on every visited observation, the value
+function learns the returns as in PPO. PPO follows.
 Everything is resumable: OUT/checkpoint.pt (policy, value, optimiser, observation statistics,
 iteration, random state), OUT/curve.csv (one row per update), OUT/curve.png, and the policy in the
 library's format OUT/questsim_policy.json (kind "questsim_policy", normalisation = the running
@@ -146,6 +151,7 @@ def main(argv=None):
     ap.add_argument("--residual-force", type=float, default=0.0, help="N at the start (0: none)")
     ap.add_argument("--residual-torque", type=float, default=0.0, help="N m at the start")
     ap.add_argument("--residual-anneal", type=float, default=20e6, help="samples to anneal it to 0")
+    ap.add_argument("--bc-iters", type=int, default=0, help="DAgger updates before PPO")
     ap.add_argument("--threads", type=int, default=1, help="torch threads")
     ap.add_argument("--env-threads", type=int, default=1)
     ap.add_argument("--seed", type=int, default=1)
@@ -200,6 +206,10 @@ def main(argv=None):
         term = np.zeros((T, N), np.float32)
         trunc_v = np.zeros((T, N), np.float32)  # V(final obs) of truncated episodes
         done = np.zeros((T, N), np.float32)
+        bc = it < a.bc_iters
+        beta = 1.0 - it / max(a.bc_iters, 1) if bc else 0.0
+        expert = np.zeros((T, N, n_act), np.float32) if bc else None
+        rng = np.random.default_rng(a.seed * 100003 + it)
         terms = np.zeros(5)
         used, ended, lens = 0.0, 0, []
         t0 = time.time()
@@ -212,6 +222,10 @@ def main(argv=None):
                 d = model.dist(x)
                 u = d.sample()
                 act[t] = u.numpy()
+                if bc:
+                    expert[t] = env.expert_actions
+                    use = rng.random(N) < beta
+                    act[t, use] = expert[t, use]
                 logp[t] = d.log_prob(u).sum(-1).numpy()
                 val[t] = model.value(x).numpy()
                 te = time.time()
@@ -247,13 +261,17 @@ def main(argv=None):
         retb = torch.from_numpy(ret.reshape(B))
         mb = B // a.minibatches
         pl_sum = vl_sum = 0.0
+        eb = torch.from_numpy(expert.reshape(B, n_act)) if bc else None
         for _ in range(a.epochs):
             perm = torch.randperm(B)
             for k in range(a.minibatches):
                 idx = perm[k * mb:(k + 1) * mb]
                 d = model.dist(xb[idx])
-                ratio = (d.log_prob(ab[idx]).sum(-1) - lpb[idx]).exp()
-                pl = -torch.min(ratio * advb[idx], ratio.clamp(0.8, 1.2) * advb[idx]).mean()
+                if bc:  # regress the expert's action (the policy's mean; its noise is left as is)
+                    pl = ((d.mean - eb[idx]) ** 2).mean()
+                else:
+                    ratio = (d.log_prob(ab[idx]).sum(-1) - lpb[idx]).exp()
+                    pl = -torch.min(ratio * advb[idx], ratio.clamp(0.8, 1.2) * advb[idx]).mean()
                 vl = ((model.value(xb[idx]) - retb[idx]) ** 2).mean()
                 loss = pl + 0.5 * vl
                 opt.zero_grad(); loss.backward()
@@ -268,7 +286,7 @@ def main(argv=None):
         with open(curve, "a", newline="") as f:
             csv.writer(f).writerow([f"{v:.6g}" if isinstance(v, float) else v for v in row])
         if it % 10 == 0 or samples >= a.samples:
-            print(f"it {it} samples {samples / 1e6:.2f}M reward {rew.mean():.4f} ep {row[9]:.1f} residual {res_f:.0f} N "
+            print(f"{'dagger beta %.2f ' % beta if bc else ''}it {it} samples {samples / 1e6:.2f}M reward {rew.mean():.4f} ep {row[9]:.1f} residual {res_f:.0f} N "
                   f"std {row[13]:.3f} env {row[16]:.0f} steps/s iter {time.time() - t0:.1f}s", flush=True)
             torch.save({"model": model.state_dict(), "opt": opt.state_dict(), "stats": stats.state(), "iteration": it,
                         "samples": samples, "torch_rng": torch.get_rng_state(), "args": vars(a)}, ckpt + ".tmp")
