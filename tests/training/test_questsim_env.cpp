@@ -173,22 +173,28 @@ TEST_CASE("QuestSim env: the action mapping is the run-time pipeline's (same tor
   CHECK(lim(6) > 0.f);
 }
 
-TEST_CASE("QuestSim env: step() with one thread never allocates (resets included)") {
-  Env env(clips(), meta(), std::vector<double>(4, 1.75), 2);
-  const auto act = random_actions(4, 9, 0.05f);
-  for (int t = 0; t < 5; ++t) env.step(act.data());
-  long long n = 0;
-  int ended = 0;
-  {
-    sparsebody_test::AllocationCounter counter;
-    for (int t = 0; t < 200; ++t) {
-      env.step(act.data());
-      for (int i = 0; i < 4; ++i) ended += env.terminated()[i] || env.truncated()[i];
+TEST_CASE("QuestSim env: step() with one thread never allocates (resets included, with and without the expert)") {
+  for (bool expert : {false, true}) {
+    CAPTURE(expert);
+    training::QuestSimEnvConfig cfg;
+    cfg.expert = expert;
+    Env env(clips(), meta(), std::vector<double>(4, 1.75), 2, cfg);
+    const auto act = random_actions(4, 9, 0.05f);
+    for (int t = 0; t < 5; ++t) env.step(act.data());
+    long long n = 0;
+    int ended = 0;
+    {
+      sparsebody_test::AllocationCounter counter;
+      for (int t = 0; t < 200; ++t) {
+        env.step(act.data());
+        for (int i = 0; i < 4; ++i) ended += env.terminated()[i] || env.truncated()[i];
+      }
+      n = counter.count();
     }
-    n = counter.count();
+    CHECK(ended > 0);  // restarts were exercised
+    CHECK(n == 0);
+    CHECK((std::abs(env.expert_actions()[0]) + std::abs(env.expert_actions()[7]) > 0.f) == expert);
   }
-  CHECK(ended > 0);  // restarts were exercised
-  CHECK(n == 0);
 }
 
 TEST_CASE("QuestSim reward: 1 for a perfect match; one joint off by d gives exp(-k d^2 / joints)") {
@@ -229,6 +235,7 @@ TEST_CASE("QuestSim env: the privileged expert tracks the reference better than 
     training::QuestSimEnvConfig cfg;
     cfg.residual_max_force = 1000;
     cfg.residual_max_torque = 300;
+    cfg.expert = true;
     Env env(clips(), meta(), std::vector<double>(4, 1.75), 8, cfg);
     std::vector<float> act(std::size_t(4) * Env::kActionSize, 0.f);
     double r = 0;

@@ -57,6 +57,7 @@ PYBIND11_MODULE(_questsim_env, m) {
       .def(py::init<>())
       .def_readwrite("max_head_error", &training::QuestSimEnvConfig::max_head_error)
       .def_readwrite("max_episode_steps", &training::QuestSimEnvConfig::max_episode_steps)
+      .def_readwrite("expert", &training::QuestSimEnvConfig::expert)
       .def_readwrite("expert_wn", &training::QuestSimEnvConfig::expert_wn)
       .def_readwrite("residual_max_force", &training::QuestSimEnvConfig::residual_max_force)
       .def_readwrite("residual_max_torque", &training::QuestSimEnvConfig::residual_max_torque)

@@ -164,6 +164,7 @@ def main(argv=None):
     paths = pick_clips(a.train_dir, a.motions, a.clips)
     clips = qe.load_clips(paths, a.n3p_lower)
     cfg = qe.Config()
+    cfg.expert = a.bc_iters > 0  # the privileged expert costs an RNEA per step: only for DAgger
     env = qe.Env(clips, [1.75] * a.envs, a.seed, cfg)
     n_obs, n_act = qe.Env.obs_size, qe.Env.action_size
     model = ActorCritic(n_obs, n_act, a.init_std)

@@ -65,6 +65,7 @@ struct QuestSimEnvConfig {
   double residual_max_force = 0;  // N: root servo bound (0: off)
   double residual_max_torque = 0; // N m
   double residual_kp = 2000, residual_kd = 200, residual_kp_rot = 400, residual_kd_rot = 40;
+  bool expert = false;            // compute expert_actions() (one RNEA per character and step)
   double expert_wn = 15;          // rad/s: natural frequency of the expert's tracking
   QuestSimRewardConfig reward{};
 };
@@ -155,7 +156,7 @@ class QuestSimEnv {
   const float* final_observations() const noexcept { return final_obs_.data(); }
   const float* rewards() const noexcept { return reward_.data(); }
   const float* reward_terms() const noexcept { return terms_.data(); }
-  const float* expert_actions() const noexcept { return expert_.data(); }  // n x kActionSize, see above  // n x 5: r(q), r(qd), r(x), r(xd), r_f
+  const float* expert_actions() const noexcept { return expert_.data(); }  // n x kActionSize, see above (zeros unless config().expert)  // n x 5: r(q), r(qd), r(x), r(xd), r_f
   // Why each character's episode ended this step: 0 it did not, 1 a failed substep, 2 a fall,
   // 3 head farther than max_head_error from the reference, 4 a non-finite reward.
   const unsigned char* terminated() const noexcept { return terminated_.data(); }
@@ -212,9 +213,11 @@ class QuestSimEnv {
   };
 
   // Reference configuration and velocity at frame t of clip c for character k (into k's buffers).
-  void reference_at(Character& k, int t) const noexcept {
+  // `advance`: frame t is the previous call's t + 1, whose configuration is already in q_next.
+  void reference_at(Character& k, int t, bool advance = false) const noexcept {
     const QuestSimReference& r = (*clips_)[k.clip];
-    k.retarget.to_q(k.model, r.pose[t], k.q_ref);
+    if (advance) k.q_ref = k.q_next;
+    else k.retarget.to_q(k.model, r.pose[t], k.q_ref);
     k.retarget.to_q(k.model, r.pose[t + 1], k.q_next);
     Retarget::velocity(k.model, k.q_ref, k.q_next, S(1.0 / cfg_.control_rate), k.v_ref);
     dynamics::forward_kinematics(k.model, k.ref, k.q_ref, &k.v_ref);
@@ -242,6 +245,7 @@ class QuestSimEnv {
   }
 
   void write_expert(int i) noexcept {
+    if (!cfg_.expert) return;  // only DAgger reads them: no inverse dynamics on the PPO path
     Character& k = *chars_[i];
     const S wn = S(cfg_.expert_wn);
     Retarget::velocity(k.model, k.sim.q(), k.q_next, S(1), k.err);  // q_ref,t+1 (-) q in the velocity layout
@@ -294,7 +298,7 @@ class QuestSimEnv {
     for (int s = 0; s < cfg_.substeps && !failed; ++s) failed = k.sim.step(h_) != dynamics::StepStatus::Ok;
     ++k.t;
     ++k.steps;
-    reference_at(k, k.t);
+    reference_at(k, k.t, true);
     const std::array<double, 2> fy = vertical_forces(k);
     const QuestSimRewardTerms rt = questsim_reward(k.model, k.sim.data(), k.sim.q(), k.sim.v(), k.ref, k.q_ref, k.v_ref,
                                                    k.fy_prev, fy, cfg_.reward);
