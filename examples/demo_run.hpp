@@ -58,7 +58,8 @@ void print_calibration(const Options& o, const Input& in, const Pipeline& pipe) 
   if (in.at_joints || o.calibration_forced) return;
   const f::CalibrationReport& r = pipe.calibration_report();
   if (r.status == f::CalibrationStatus::Calibrated) {
-    std::printf("calib   automatic: standing at frames %ld-%ld (%.1f-%.1f s), stature %.2f m, confidence %.2f", frame_at(in, r.first_time),
+    std::printf("calib   automatic%s: standing at frames %ld-%ld (%.1f-%.1f s), stature %.2f m, confidence %.2f",
+                r.provisional ? " (provisional: no full 1 s stand yet)" : "", frame_at(in, r.first_time),
                 frame_at(in, r.last_time), r.first_time - in.frames.front().time, r.last_time - in.frames.front().time, r.stature,
                 r.confidence);
     if (r.windows > 1) std::printf(", %d windows averaged", r.windows);

@@ -50,7 +50,8 @@ TEST_CASE("auto calibration: standing still 2 s then walking is calibrated from 
   const auto& r = f.r();
   CHECK(r.status == features::CalibrationStatus::Calibrated);
   CHECK(r.source == features::CalibrationSource::Automatic);
-  CHECK(f.changes == 1);
+  CHECK(f.changes == 2);  // the provisional estimate after 0.5 s, then the whole window's
+  CHECK_FALSE(r.provisional);
   CHECK(r.first_time >= 0.0);
   CHECK(r.last_time <= 2.0);
   CHECK(r.last_time - r.first_time >= 1.0 - 1e-9);
@@ -77,7 +78,7 @@ TEST_CASE("auto calibration: walking from frame 0, standing at 5 s") {
   const auto walk = sparsebody_test::session({{Phase::Walk, 5.0, 1.70}, {Phase::Stand, 3.0, 1.70}});
   for (std::size_t i = 0; i < walk.size(); ++i) {
     f.feed(walk[i]);
-    if (walk[i].time < 5.9) REQUIRE(f.r().status == features::CalibrationStatus::Default);
+    if (walk[i].time < 5.4) REQUIRE(f.r().status == features::CalibrationStatus::Default);
   }
   CHECK(f.r().status == features::CalibrationStatus::Calibrated);
   CHECK(f.r().first_time >= 5.0 - 1e-9);
@@ -99,10 +100,36 @@ TEST_CASE("auto calibration: refinement - higher replaces, same is averaged, low
   CHECK(r.replaced == 1);
   CHECK(r.windows == 2);
   CHECK(r.skipped == 1);
-  CHECK(f.changes == 3);
+  CHECK(f.changes == 4);  // the provisional estimate of the first stand, its window, the replacement, the average
   CHECK(r.eye_height == doctest::Approx(1.665).epsilon(0.002).scale(0));
   CHECK(r.confidence > 0.7);  // two agreeing windows
   CHECK(std::string(r.message).find("1 lower") != std::string::npos);
+}
+
+TEST_CASE("auto calibration: a short first stand gives a provisional estimate that a full window replaces") {
+  const auto s = sparsebody_test::session({{Phase::Stand, 0.7, 1.60}, {Phase::Walk, 1.0, 1.60},
+                                           {Phase::Stand, 2.0, 1.20}, {Phase::Walk, 1.0, 1.20},    // sitting
+                                           {Phase::Stand, 2.0, 1.58}, {Phase::Walk, 1.0, 1.58}});  // a full stand
+  Feeder f;
+  std::size_t i = 0;
+  for (; s[i].time < 1.7; ++i) f.feed(s[i]);
+  CHECK(f.r().status == features::CalibrationStatus::Calibrated);
+  CHECK(f.r().provisional);
+  CHECK(f.changes == 1);
+  CHECK(f.r().last_time - f.r().first_time == doctest::Approx(0.5).epsilon(0.05).scale(0));  // its first 0.5 s
+  CHECK(f.r().eye_height == doctest::Approx(1.60).epsilon(0.002).scale(0));
+  CHECK(std::string(f.r().message).find("automatic (provisional): standing at") == 0);
+  for (; s[i].time < 4.7; ++i) f.feed(s[i]);  // sitting (lower) does not replace it
+  CHECK(f.r().provisional);
+  CHECK(f.r().skipped == 1);
+  CHECK(f.changes == 1);
+  for (; i < s.size(); ++i) f.feed(s[i]);  // a full stand, a little lower (within 4 cm): replaces it
+  CHECK_FALSE(f.r().provisional);
+  CHECK(f.r().windows == 1);
+  CHECK(f.changes == 2);
+  CHECK(f.r().eye_height == doctest::Approx(1.58).epsilon(0.002).scale(0));
+  CHECK(f.r().first_time >= 4.7);
+  CHECK(std::string(f.r().message).find("automatic: standing at") == 0);
 }
 
 TEST_CASE("auto calibration: a 2.5 m giant is refused, the default body stays") {
@@ -150,8 +177,16 @@ TEST_CASE("auto calibration: NaN bursts and a lost headset break a window, no Na
         if (kind == 0) s[i].pose[1].orientation.w = nan;  // also a NaN controller (ignored: not valid data)
       }
     f.feed(s);
-    CHECK(f.r().status == features::CalibrationStatus::Default);
+    // 0.77 s stands: a provisional estimate only (first_window), never a confirmed one
+    CHECK(f.r().status == features::CalibrationStatus::Calibrated);
+    CHECK(f.r().provisional);
+    CHECK(f.r().windows == 1);
     CHECK(finite(f.cal.calibration()));
+    features::AutoCalibrationConfig strict;
+    strict.first_window = 0;  // without the provisional estimate: the default body
+    Feeder h(strict);
+    h.feed(s);
+    CHECK(h.r().status == features::CalibrationStatus::Default);
     // the same session without breaks calibrates
     Feeder g;
     g.feed(sparsebody_test::session({{Phase::Stand, 2.5, 1.65}}));

@@ -27,7 +27,7 @@ bool finite(const n3p_test::SmallPipeline& p) {
 avatar::N3PConfig no_ik() {
   avatar::N3PConfig c;
   c.foot_ik = c.hand_ik = false;
-  c.anchor_head = false;  // the predictor's own output: no post-processing at all
+  c.anchor_head = c.head_reach = false;  // the predictor's own output: no post-processing at all
   return c;
 }
 }  // namespace

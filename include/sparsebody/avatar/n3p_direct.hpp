@@ -47,6 +47,7 @@
 #include "sparsebody/nn/half.hpp"
 #include "sparsebody/nn/int8.hpp"
 #include "sparsebody/pose/body_pose.hpp"
+#include "sparsebody/pose/chain_reach.hpp"
 #include "sparsebody/pose/contact.hpp"
 #include "sparsebody/pose/ik.hpp"
 #include "sparsebody/pose/joint_map.hpp"
@@ -80,6 +81,12 @@ struct N3PConfig {
   // headset) is left to the sanitizer's reset instead of dragging the body (and the physics mode's
   // reference) across the room in a few frames.
   double anchor_max_step = 0.03;
+  // Head reach: then the spine (spine, chest, neck) bends so that the head joint reaches the
+  // calibrated headset (pose::ChainReach, at most ~30 deg per joint), the head keeping its
+  // orientation: what the anchor leaves (the height in a bow, a crouch, a restart) is not left in
+  // the avatar's head. Before the hands' IK, so the arms follow the chest.
+  bool head_reach = true;
+  pose::ChainReachConfig spine{};
   trackers::SanitizerConfig sanitizer{};
   features::DeviceModel devices{};                // device -> joint offsets (DeviceModel::none(): trackers at the joints)
   features::AutoCalibrationConfig calibration{};  // the standing-window search (enabled by default)
@@ -114,6 +121,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     for (int side = 0; side < 2; ++side)
       reach_[side] = s.offsets[leg_[side][1]].norm() + s.offsets[leg_[side][2]].norm();
     head_ = f("Head");
+    spine_ = pose::ChainReach(pred_.skeleton(), head_, 3);
     auto_ = features::AutoCalibration(cfg.devices, pred_.meta().standing_head_height, cfg.calibration);
     calib_.base = auto_.calibration();
     reset();
@@ -211,6 +219,10 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       pred_.shift(shift.x(), shift.z());
       out_.pose().root_position += shift;
       for (auto& p : out_.world().position) p += shift;
+    }
+    if (cfg_.head_reach && !spine_.empty()) {
+      spine_.solve(pred_.skeleton(), out_.pose(), out_.world(), o[0].p, cfg_.spine);
+      pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
     }
     if (cfg_.foot_ik) pin_feet();
     if (cfg_.hand_ik)
@@ -323,6 +335,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   std::array<bool, 3> present_{};
   int arm_[2][3] = {}, leg_[2][3] = {};
   int head_ = -1;
+  pose::ChainReach spine_;
   double reach_[2] = {};
 };
 

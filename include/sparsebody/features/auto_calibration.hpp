@@ -16,6 +16,11 @@
 //   - stature = eye height / 0.936: eye height is 0.936 of stature in Winter, "Biomechanics and
 //     Motor Control of Human Movement", Fig. 4.1 (segment lengths after Drillis & Contini 1966);
 //   - s = standard head-joint height / (eye height - e.y) (features/calibration.hpp).
+// The first stand need not last min_window: after first_window (0.5 s) of it a provisional estimate
+// is used (report.provisional), and the same window, closed when the stand ends or reaches
+// max_window, replaces it (a refinement: the size barely changes, so the pipelines carry on).
+// Waiting the whole first stand ran the default body for ~2 s, which on a 1.90 m user cost
+// Neural3Points ~20 cm of head height for those seconds.
 // A stature outside [1.2, 2.2] m is refused (counted, not used). Later windows refine: one whose
 // eye height is > 4 cm above the estimate replaces it (the first was not fully upright), one
 // within +-4 cm is averaged in (stature; the offsets of the estimate are kept) and raises the
@@ -47,6 +52,13 @@ namespace sparsebody::features {
 struct AutoCalibrationConfig {
   bool enabled = true;                 // false: no search (the default body until calibrated explicitly)
   double min_window = 1.0;             // s of standing still for a window
+  // s: while there is no estimate yet, a stand this long gives a first, provisional one (the
+  // window stays open and replaces it when it closes), so a session does not run the default body
+  // for the whole first stand. 0: off (the first estimate waits for min_window like the others).
+  double first_window = 0.5;
+  // ... and only a still one: stillness (below) at least this (a 1 s window needs none). The
+  // jumping CMU clip 01_01's 0.5 s pause scores 0.49; a held stand with device noise ~0.9.
+  double first_window_stillness = 0.6;
   double max_window = 2.0;             // s: a window is closed at this length
   double mean_head_speed = 0.08;       // m/s, window mean below
   double max_head_speed = 0.25;        // m/s, every frame below
@@ -100,7 +112,7 @@ class AutoCalibration {
     append(s);
     long long start = 0;
     WindowStats w;
-    const bool still = trailing_window(start, w);
+    const bool still = trailing_window(start, w, early() ? cfg_.first_window : cfg_.min_window);
     if (!still) {
       used_stand_ = false;
       return seg_active_ ? close_window() : false;
@@ -112,6 +124,11 @@ class AutoCalibration {
       used_stand_ = true;
       return close_window();
     }
+    // the provisional estimate: tried when the stand reaches first_window, then every quarter second
+    if (early() && est_n_ == 0 && at(seg_end_).t >= early_next_) {
+      early_next_ = at(seg_end_).t + 0.25;
+      return close_window(/*keep_open=*/true);
+    }
     return false;
   }
 
@@ -120,6 +137,8 @@ class AutoCalibration {
   void recalibrate() noexcept {
     manual_ = false;
     est_n_ = 0;
+    provisional_ = prov_open_ = false;
+    early_next_ = -std::numeric_limits<double>::infinity();
     frame_ = 0;
     calib_ = Calibration::uncalibrated(devices_);
     report_ = CalibrationReport{};
@@ -134,7 +153,8 @@ class AutoCalibration {
   void break_window() noexcept {
     held_ = 0;
     run_ = 0;
-    seg_active_ = used_stand_ = false;
+    seg_active_ = used_stand_ = prov_open_ = false;
+    early_next_ = -std::numeric_limits<double>::infinity();
     prev_valid_.fill(false);
     have_prev_time_ = false;
   }
@@ -262,13 +282,17 @@ class AutoCalibration {
   }
   const Sample& at(long long a) const noexcept { return ring_[static_cast<std::size_t>(a % kCapacity)]; }
 
-  // The shortest trailing window spanning min_window; true when it passes the stillness tests.
-  bool trailing_window(long long& start, WindowStats& w) const noexcept {
+  // The first stand of a search is judged on first_window (the provisional estimate, then the
+  // window that replaces it), every later one on min_window.
+  bool early() const noexcept { return cfg_.first_window > 0 && (est_n_ == 0 || prov_open_); }
+
+  // The shortest trailing window spanning `span` s; true when it passes the stillness tests.
+  bool trailing_window(long long& start, WindowStats& w, double span) const noexcept {
     const long long newest = run_ - 1, oldest = run_ - held_;
     const double t1 = at(newest).t;
     long long a = newest;
-    while (a > oldest && t1 - at(a).t < cfg_.min_window - 1e-9) --a;
-    if (t1 - at(a).t < cfg_.min_window - 1e-9) return false;
+    while (a > oldest && t1 - at(a).t < span - 1e-9) --a;
+    if (t1 - at(a).t < span - 1e-9) return false;
     start = a;
     double sum = 0, lo = std::numeric_limits<double>::infinity(), hi = -lo, cs[2] = {0, 0};
     int cn[2] = {0, 0};
@@ -290,11 +314,21 @@ class AutoCalibration {
   }
 
   // The open window [seg_start_, seg_end_] becomes an estimate (or is refused / skipped).
-  bool close_window() noexcept {
-    seg_active_ = false;
+  // keep_open: the provisional first estimate; the window grows on and replaces it when it closes.
+  bool close_window(bool keep_open = false) noexcept {
+    seg_active_ = keep_open;
+    const bool own = !keep_open && prov_open_;  // the window the provisional estimate came from
+    if (!keep_open) {
+      prov_open_ = false;
+      early_next_ = -std::numeric_limits<double>::infinity();
+    }
     const long long a0 = seg_start_, a1 = seg_end_;
     const int n = static_cast<int>(a1 - a0 + 1);
     if (n < 2) return false;
+    const double duration = at(a1).t - at(a0).t;
+    // A window shorter than min_window (the user moved on) is no estimate; when it is the
+    // provisional one's, that stays provisional until a full window confirms or replaces it.
+    if (!keep_open && duration < cfg_.min_window - 1e-9) return false;
     double sum = 0, lo = std::numeric_limits<double>::infinity(), hi = -lo;
     std::array<long long, trackers::kTrackerCount> best{};
     std::array<double, trackers::kTrackerCount> best_score;
@@ -315,19 +349,29 @@ class AutoCalibration {
     std::nth_element(h, h + n / 2, h + n);
     double eye_raw = h[n / 2];
     if (n % 2 == 0) eye_raw = 0.5 * (eye_raw + *std::max_element(h, h + n / 2));
-    const double duration = at(a1).t - at(a0).t;
     const double mean_speed = sum / n, range = hi - lo;
     const double stillness = std::clamp(1 - 0.5 * mean_speed / cfg_.mean_head_speed - 0.5 * range / cfg_.head_height_range, 0.0, 1.0);
     const double quality = 0.5 * std::min(1.0, duration / cfg_.max_window) + 0.5 * stillness;
     const double stature = cfg_.estimate_floor ? cfg_.assumed_stature : eye_raw / cfg_.eye_height_ratio;
+    // A full window replaces a provisional estimate (unless lower: sitting), and its own window
+    // keeps the provisional orientation offsets when the height agrees: the same stand, so only the
+    // size moves, by a refinement.
+    const bool was_provisional = provisional_ && !keep_open;
+    const bool keep_offsets = own && std::abs(eye_raw - est_eye_) <= cfg_.agreement;
+    const bool plausible = stature >= cfg_.min_stature && stature <= cfg_.max_stature;
+    if (was_provisional && plausible && (own || eye_raw - est_eye_ >= -cfg_.agreement)) est_n_ = 0, provisional_ = false;
     const bool have = est_n_ > 0;
+    if (keep_open) {  // provisional: only a plausible first estimate; the whole window judges the rest
+      if (have || !plausible || stillness < cfg_.first_window_stillness) return false;
+      provisional_ = prov_open_ = true;
+    }
     const double diff = have ? eye_raw - est_eye_ : 0.0;
     if (have && diff < -cfg_.agreement) {  // lower: sitting or crouching
       ++report_.skipped;
       describe();
       return false;
     }
-    if (!(stature >= cfg_.min_stature && stature <= cfg_.max_stature)) {
+    if (!plausible) {
       ++report_.refused;
       if (!have) {
         report_.status = CalibrationStatus::Refused;
@@ -347,15 +391,17 @@ class AutoCalibration {
       est_eye_ = eye_raw;
       est_lo_ = est_hi_ = eye_raw;
       est_quality_ = quality;
-      Calibration c = Calibration::uncalibrated(devices_);
-      for (int k = 0; k < trackers::kTrackerCount; ++k) {
-        if (!std::isfinite(best_score[k])) continue;
-        const Sample& s = at(best[k]);
-        Eigen::Matrix3d target = Calibration::facing(s.q[0]);
-        if (k == 3) target = target * devices_.pelvis_standing.toRotationMatrix();
-        c.offset[k] = Eigen::Quaterniond(s.q[k].normalized().toRotationMatrix().transpose() * target);
+      if (!keep_offsets) {
+        Calibration c = Calibration::uncalibrated(devices_);
+        for (int k = 0; k < trackers::kTrackerCount; ++k) {
+          if (!std::isfinite(best_score[k])) continue;
+          const Sample& s = at(best[k]);
+          Eigen::Matrix3d target = Calibration::facing(s.q[0]);
+          if (k == 3) target = target * devices_.pelvis_standing.toRotationMatrix();
+          c.offset[k] = Eigen::Quaterniond(s.q[k].normalized().toRotationMatrix().transpose() * target);
+        }
+        calib_ = c;
       }
-      calib_ = c;
     } else {  // the same stand height: averaged in
       est_eye_ = (est_eye_ * est_n_ + eye_raw) / (est_n_ + 1);
       est_quality_ = (est_quality_ * est_n_ + quality) / (est_n_ + 1);
@@ -380,6 +426,7 @@ class AutoCalibration {
     r.floor_estimated = cfg_.estimate_floor;
     r.confidence = std::clamp(est_quality_ * (0.7 + 0.3 * agree), 0.0, 1.0);
     r.windows = est_n_;
+    r.provisional = provisional_;
     describe();
     return true;
   }
@@ -399,8 +446,9 @@ class AutoCalibration {
       std::snprintf(r.message, sizeof r.message, "automatic: standing at %.1f-%.1f s, floor estimated at y = %.2f m (stature assumed %.2f m), %d window%s%s",
                     r.first_time, r.last_time, r.floor, r.stature, r.windows, r.windows == 1 ? "" : "s", extra);
     else
-      std::snprintf(r.message, sizeof r.message, "automatic: standing at %.1f-%.1f s, stature %.2f m, confidence %.2f, %d window%s%s",
-                    r.first_time, r.last_time, r.stature, r.confidence, r.windows, r.windows == 1 ? "" : "s", extra);
+      std::snprintf(r.message, sizeof r.message, "automatic%s: standing at %.1f-%.1f s, stature %.2f m, confidence %.2f, %d window%s%s",
+                    r.provisional ? " (provisional)" : "", r.first_time, r.last_time, r.stature,
+                    r.confidence, r.windows, r.windows == 1 ? "" : "s", extra);
   }
 
   AutoCalibrationConfig cfg_;
@@ -422,6 +470,9 @@ class AutoCalibration {
   long long run_ = 0;  // frames appended to the run
   int held_ = 0;       // of which the ring holds the newest
   bool seg_active_ = false, used_stand_ = false;
+  bool provisional_ = false;  // the estimate is the first stand's early one (first_window)
+  double early_next_ = -std::numeric_limits<double>::infinity();  // next provisional try (s)
+  bool prov_open_ = false;    // the provisional estimate's window is still open
   long long seg_start_ = 0, seg_end_ = 0;
   // the estimate
   int est_n_ = 0;

@@ -37,6 +37,9 @@ struct CalibrationReport {
   int replaced = 0;  // estimates replaced by a window more than 4 cm higher
   int skipped = 0;   // windows more than 4 cm lower than the estimate (sitting, crouching): not used
   int refused = 0;   // windows whose stature was outside the plausible range: not used
+  // The estimate is the first stand's early one (AutoCalibrationConfig::first_window): the window
+  // is still open and replaces it when the user stops standing (or after max_window).
+  bool provisional = false;
   char message[192] = "no standing frame yet: default body";  // one line
 };
 
