@@ -36,6 +36,7 @@
 //   // frame (a T-pose measures the wrist offsets, §7), p.recalibrate() searches again
 //   for (frame : frames) { p.push(frame); if (p.has_output()) use(p.pose(), p.world(), p.user_scale()); }
 #pragma once
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <string>
@@ -274,6 +275,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     pred_.reset();
     lock_[0].reset();
     lock_[1].reset();
+    plant_w_[0] = plant_w_[1] = 0;
     still_.reset();
   }
 
@@ -291,7 +293,10 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     return true;
   }
 
-  // Feet in contact stay where contact began (lock_), the leg bent to reach them.
+  // Feet in contact stay where contact began (lock_), the leg bent to reach them. While the user
+  // stands still a locked foot also keeps the orientation it was planted with (the lock holds the
+  // ankle, so a foot turning about it moves the toes: 1.2 cm/s of creep), eased in and out over
+  // 8 frames.
   void pin_feet() noexcept {
     for (int side = 0; side < 2; ++side) {
       const int* l = leg_[side];
@@ -299,10 +304,19 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       const bool still = cfg_.hold_feet_when_still && still_.still();
       lock_[side].hold(still);
       const bool c = contact(side) || (still && contact_probability(side) > cfg_.still_contact_threshold);
+      const bool was_locked = lock_[side].state() == pose::FootLock::State::Locked;
       if (lock_[side].update(c, out_.world().position[l[2]], out_.world().position[l[0]], reach_[side], cfg_.foot_max_drift,
                              target)) {
+        const bool locked = lock_[side].state() == pose::FootLock::State::Locked;
+        Eigen::Quaterniond& foot = out_.world().rotation[l[2]];
+        if (locked && !was_locked) planted_[side] = foot;
+        const double goal = locked && still ? 1.0 : 0.0;
+        plant_w_[side] += std::clamp(goal - plant_w_[side], -1.0 / 8, 1.0 / 8);
+        if (plant_w_[side] > 0) foot = foot.slerp(plant_w_[side], planted_[side]).normalized();
         put_limb(l, target);
         pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
+      } else {
+        plant_w_[side] = 0;  // free: the predicted orientation
       }
     }
   }
@@ -336,6 +350,8 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   int arm_[2][3] = {}, leg_[2][3] = {};
   int head_ = -1;
   pose::ChainReach spine_;
+  Eigen::Quaterniond planted_[2] = {Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};  // at the lock
+  double plant_w_[2] = {0, 0};  // how much of planted_ the locked foot keeps (0..1)
   double reach_[2] = {};
 };
 
