@@ -12,7 +12,7 @@ CXX=clang++ cmake -S . -B $B -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSPARSEBODY_FUZZ
   -DSPARSEBODY_BUILD_BENCH=OFF -DSPARSEBODY_BUILD_EXAMPLES=OFF -DSPARSEBODY_NATIVE=OFF -DSPARSEBODY_INSTALL=OFF -DSPARSEBODY_BUILD_PYTHON=OFF -DSPARSEBODY_BUILD_C_API=OFF > /dev/null
 cmake --build $B -j"$(nproc)"
 C=$B/corpus
-rm -rf $C; mkdir -p $C/weights_json $C/model_json $C/bvh $C/tracker_csv $C/pipelines $B/artifacts
+rm -rf $C; mkdir -p $C/weights_json $C/model_json $C/bvh $C/tracker_csv $C/pipelines $C/capi $B/artifacts
 find tests/golden -name '*.weights.json' -size -16k -exec cp {} $C/weights_json/ \; 2>/dev/null || true
 find tests -name '*.json' -size -64k | grep -i model | head -20 | xargs -r -I{} cp {} $C/model_json/ || true
 /usr/bin/python3 - "$C" <<'PY'
@@ -31,6 +31,7 @@ find tests -name '*.bvh' -size -200k -exec cp {} $C/bvh/ \; 2>/dev/null || true
 find tests examples -name '*.csv' -size -200k -exec cp {} $C/tracker_csv/ \; 2>/dev/null || true
 printf 'time,head_px\n' > $C/tracker_csv/short.csv
 head -c 4096 /dev/urandom > $C/pipelines/random0
+head -c 4096 /dev/urandom > $C/capi/random0
 /usr/bin/python3 -m weights_tool.questsim policy --bodies 21 --joint-dofs 48 --future 6 --seed 7 --out $B/questsim_policy.json > /dev/null
 export SPARSEBODY_QUESTSIM_POLICY=$PWD/$B/questsim_policy.json
 status=0
@@ -39,8 +40,8 @@ for r in tests/fuzz/regressions/*; do
   h=$(basename "$r"); h=${h%%-*}
   $B/tests/fuzz/fuzz_$h "$r" > $B/regression.log 2>&1 || { echo "[fuzz] regression $r FAILED"; tail -20 $B/regression.log; status=1; }
 done
-for h in weights_json model_json bvh tracker_csv pipelines; do
-  max_len=16384; [ $h = pipelines ] && max_len=3000
+for h in weights_json model_json bvh tracker_csv pipelines capi; do
+  max_len=16384; [ $h = pipelines ] && max_len=3000; [ $h = capi ] && max_len=6000
   echo "[fuzz] $h: ${SECONDS_EACH} s"
   if ! $B/tests/fuzz/fuzz_$h -max_total_time="$SECONDS_EACH" -max_len=$max_len -rss_limit_mb=2048 -timeout=60 \
         -print_final_stats=1 -artifact_prefix=$B/artifacts/$h- $C/$h > $B/fuzz_$h.log 2>&1; then
