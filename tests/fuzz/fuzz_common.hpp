@@ -1,5 +1,7 @@
 // Shared checks of the fuzz harnesses.
 #pragma once
+#include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -15,6 +17,15 @@ inline void check_message(const char* what) {
     std::abort();
   }
 }
+
+// The fuzzer's bytes read in order; past the end every read is 0.
+struct Bytes {
+  const std::uint8_t* p;
+  std::size_t n, i = 0;
+  bool more() const { return i < n; }
+  std::uint8_t u8() { return i < n ? p[i++] : 0; }
+  float unit() { return u8() / 255.0f; }  // [0, 1]
+};
 
 // Keeps a result alive so the optimiser cannot drop the work.
 inline void consume(double v) {

@@ -10,6 +10,7 @@
 #include <limits>
 #include <memory>
 
+#include "fuzz_common.hpp"
 #include "sparsebody/avatar/lobstr_pipeline.hpp"
 #include "sparsebody/avatar/n3p_direct.hpp"
 #include "sparsebody/avatar/n3p_physics.hpp"
@@ -19,13 +20,7 @@ namespace sb = sparsebody;
 
 namespace {
 
-struct Bytes {
-  const std::uint8_t* p;
-  std::size_t n, i = 0;
-  bool more() const { return i < n; }
-  std::uint8_t u8() { return i < n ? p[i++] : 0; }
-  float unit() { return u8() / 255.0f; }  // [0, 1]
-};
+using sparsebody_fuzz::Bytes;
 
 // One pose component from the stream: usually the plausible value nudged, sometimes a hostile one.
 float component(Bytes& b, float plausible) {
