@@ -59,6 +59,13 @@ PYBIND11_MODULE(_questsim_env, m) {
       .def_readwrite("max_episode_steps", &training::QuestSimEnvConfig::max_episode_steps)
       .def_readwrite("expert", &training::QuestSimEnvConfig::expert)
       .def_readwrite("expert_wn", &training::QuestSimEnvConfig::expert_wn)
+      .def_readwrite("expert_support", &training::QuestSimEnvConfig::expert_support)
+      .def_readwrite("expert_friction", &training::QuestSimEnvConfig::expert_friction)
+      .def_readwrite("expert_cop_radius", &training::QuestSimEnvConfig::expert_cop_radius)
+      .def_readwrite("expert_yaw_radius", &training::QuestSimEnvConfig::expert_yaw_radius)
+      .def_readwrite("expert_support_height", &training::QuestSimEnvConfig::expert_support_height)
+      .def_readwrite("expert_feedforward", &training::QuestSimEnvConfig::expert_feedforward)
+      .def_readwrite("expert_lead", &training::QuestSimEnvConfig::expert_lead)
       .def_readwrite("residual_max_force", &training::QuestSimEnvConfig::residual_max_force)
       .def_readwrite("residual_max_torque", &training::QuestSimEnvConfig::residual_max_torque)
       .def_property("reward_mean_over_joints", [](const training::QuestSimEnvConfig& c) { return c.reward.mean_over_joints; },

@@ -13,7 +13,8 @@ helps the character stay up early and is annealed to zero (--residual-force N ov
 Exploration noise: a learned state-independent log std, started at --init-std (the paper's fixed
 0.03 needs its 14 billion steps).
 Warm start (--bc-iters K): the first K updates are DAgger (Ross et al. 2011) on the environment's
-privileged expert (computed-torque tracking of the reference, questsim_env.hpp): each step a
+privileged expert (computed-torque tracking of the reference with the feet carrying the root's
+wrench, questsim_env.hpp; --expert-wn, --expert-support-height): each step a
 character executes the expert's action with probability beta (1 -> 0 over the K updates), else the
 policy's sample; the policy regresses the expert's action on every visited observation, the value
 function learns the returns as in PPO. PPO follows.
@@ -152,6 +153,9 @@ def main(argv=None):
     ap.add_argument("--residual-torque", type=float, default=0.0, help="N m at the start")
     ap.add_argument("--residual-anneal", type=float, default=20e6, help="samples to anneal it to 0")
     ap.add_argument("--bc-iters", type=int, default=0, help="DAgger updates before PPO")
+    ap.add_argument("--expert-wn", type=float, default=15.0, help="rad/s: the expert's tracking frequency")
+    ap.add_argument("--expert-support-height", type=float, default=0.02,
+                    help="m: feet this close to the floor carry the expert's root wrench (0: no stance support)")
     ap.add_argument("--threads", type=int, default=1, help="torch threads")
     ap.add_argument("--env-threads", type=int, default=1)
     ap.add_argument("--seed", type=int, default=1)
@@ -164,7 +168,10 @@ def main(argv=None):
     paths = pick_clips(a.train_dir, a.motions, a.clips)
     clips = qe.load_clips(paths, a.n3p_lower)
     cfg = qe.Config()
-    cfg.expert = a.bc_iters > 0  # the privileged expert costs an RNEA per step: only for DAgger
+    cfg.expert = a.bc_iters > 0  # the privileged expert costs two RNEAs per step: only for DAgger
+    cfg.expert_wn = a.expert_wn
+    cfg.expert_support = a.expert_support_height > 0
+    cfg.expert_support_height = max(a.expert_support_height, 1e-6)
     env = qe.Env(clips, [1.75] * a.envs, a.seed, cfg)
     n_obs, n_act = qe.Env.obs_size, qe.Env.action_size
     model = ActorCritic(n_obs, n_act, a.init_std)
