@@ -5,6 +5,7 @@ pkgs=(cmake g++ make libeigen3-dev libxsimd-dev nlohmann-json3-dev doctest-dev l
       python3-torch python3-numpy python3-pytest libopenblas0-pthread
       pybind11-dev python3-dev python3-matplotlib  # the Python module (weights_tool/native) and its plots
       libtorch-dev libmujoco-dev assimp-testmodels clang libclang-rt-14-dev
+      libxnnpack-dev libpthreadpool-dev  # XNNPACK, the peer of bench_xnnpack (its header includes pthreadpool.h)
       g++-aarch64-linux-gnu qemu-user  # ARM64 cross build + emulator (.ci/isa.sh)
       chromium libjs-three  # sparsebody_demo --html and its browser test (tests/viewer)
       mono-mcs mono-runtime)  # the C# binding's test (tests/capi, capi_csharp)
