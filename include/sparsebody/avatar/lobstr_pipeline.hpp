@@ -127,13 +127,22 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   // push(frame) (any rate, PipelineFrontEnd) runs step once per model tick.
   // One model frame (the caller does the resampling). `restart`: state reset before this frame.
   void step(const trackers::TrackerFrame& f, bool restart = false) noexcept {
+    if (begin_step(f, restart)) end_step(run_network());
+  }
+
+  // step() in two halves, for stepping many users' networks in one call (avatar/lobstr_batch.hpp):
+  // begin_step does everything before the network and returns its input (the 37 features), or
+  // nullptr when the frame is not usable (then the frame is done); end_step(y) takes the
+  // network's outputs for that input and does the rest. step(f) = begin_step(f), then
+  // end_step(run_network()). The network's state is network() (Streaming mode: one step per frame).
+  const T* begin_step(const trackers::TrackerFrame& f, bool restart = false) noexcept {
     const trackers::SanitizedFrame& s = stream_.sanitize(f);
     if (restart || s.reset) {
       reset_state();
       auto_.break_window();
     }
     ++frames_;
-    if (!s.usable) { out_.invalidate(); return; }
+    if (!s.usable) { out_.invalidate(); return nullptr; }
     if (auto_.push(f.time, s.pose, s.measured)) {  // a new calibration found while running
       const double k = auto_.calibration().scale / calib_.scale;
       calib_ = auto_.calibration();
@@ -155,7 +164,9 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     calib_.apply(s.pose, cal_);
     still_.update(cal_[0].position, cal_[0].orientation, 1.0 / meta_.frame_rate);
     feat_.compute(cal_, x_);
-    const T* y = run_network();
+    return x_;
+  }
+  void end_step(const T* y) noexcept {
     for (int i = 0; i < Net::out_size; ++i) y_[i] = y[i];
     decode_lower_body();
     if (cfg_.upper_body_ik) upper_.solve(meta_.skeleton, cal_, out_.pose(), out_.world());
@@ -187,6 +198,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   const pose::JointMap& joint_map() const noexcept { return map_; }
   const predict::LoBSTrMeta& meta() const noexcept { return meta_; }
   const T* features() const noexcept { return x_; }
+  nn::Network<Net>& network() noexcept { return net_; }
   const T* network_output() const noexcept { return y_; }  // [48 pose 6D | 2 left | 2 right]
   double contact_probability(int foot) const noexcept { return y_[48 + 2 * foot + 1]; }
   bool contact(int foot) const noexcept { return contact_probability(foot) > cfg_.contact_threshold; }

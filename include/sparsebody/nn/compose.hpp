@@ -165,6 +165,10 @@ struct Parallel {
   static void forward(const Params& p, State& s, const scalar* x, scalar* y) noexcept {
     forward_each(p, s, x, y, std::make_index_sequence<N>{});
   }
+  // n instances at once (nn/batch.hpp): each head batched, then copied out as forward() does.
+  static void forward_batch(const Params& p, State* const* s, int n, const scalar* const* x, scalar* const* y) noexcept {
+    batch_each(p, s, n, x, y, std::make_index_sequence<N>{});
+  }
   static void reset(State& s) noexcept { reset_each(s, std::make_index_sequence<N>{}); }
 
  private:
@@ -183,6 +187,22 @@ struct Parallel {
   static void forward_each(const Params& p, State& s, const scalar* x, scalar* y, std::index_sequence<I...>) noexcept {
     ((head<I>::forward(std::get<I>(p.heads), std::get<I>(s.heads), x, std::get<I>(s.buffers).data()),
       copy_n(std::get<I>(s.buffers).data(), head<I>::out_size, y + offset<I>())), ...);
+  }
+  template <std::size_t I>
+  static void batch_head(const Params& p, State* const* s, int n, const scalar* const* x, scalar* const* y) noexcept {
+    typename head<I>::State* hs[kBatchMax];
+    scalar* out[kBatchMax];
+    for (int i = 0; i < n; ++i) {
+      hs[i] = &std::get<I>(s[i]->heads);
+      out[i] = std::get<I>(s[i]->buffers).data();
+    }
+    head<I>::forward_batch(std::get<I>(p.heads), hs, n, x, out);
+    for (int i = 0; i < n; ++i) copy_n(out[i], head<I>::out_size, y[i] + offset<I>());
+  }
+  template <std::size_t... I>
+  static void batch_each(const Params& p, State* const* s, int n, const scalar* const* x, scalar* const* y,
+                         std::index_sequence<I...>) noexcept {
+    (batch_head<I>(p, s, n, x, y), ...);
   }
   static void copy_n(const scalar* src, int n, scalar* dst) noexcept {
     for (int i = 0; i < n; ++i) dst[i] = src[i];
