@@ -10,6 +10,7 @@
 #include <benchmark/benchmark.h>
 
 #include "nn/random_tables.hpp"
+#include "sparsebody/avatar/lobstr_batch.hpp"
 #include "sparsebody/avatar/lobstr_pipeline.hpp"
 
 using namespace sparsebody;
@@ -100,6 +101,39 @@ void BM_NetworkOnly(benchmark::State& st) {
   st.SetLabel(P::kHidden == 256 ? "network step only, H=256" : "network step only, H=1024");
 }
 
+// N users per frame (st.range(0)), each on the clip from its own start frame: one LoBSTrBatch
+// step (batched = 1) against N LoBSTrPipeline steps (batched = 0) on the same frames. The time is
+// per frame for all N users; per_user divides it by N.
+template <class P>
+void BM_Crowd(benchmark::State& st) {
+  const int n = static_cast<int>(st.range(0));
+  const bool batched = st.range(1) != 0;
+  const auto w = weights<P>();
+  avatar::LoBSTrBatch<P> crowd(w, n);
+  std::vector<std::unique_ptr<P>> single;
+  for (int u = 0; u < n; ++u) single.push_back(std::make_unique<P>(w));
+  const auto frames = clip_frames();
+  std::vector<trackers::TrackerFrame> now(static_cast<std::size_t>(n));
+  long t = 0;
+  for (auto _ : st) {
+    for (int u = 0; u < n; ++u) {
+      now[u] = frames[(static_cast<std::size_t>(t) + 13 * u) % frames.size()];
+      now[u].time = t / 30.0;
+    }
+    ++t;
+    if (batched) {
+      crowd.step(now.data());
+      benchmark::DoNotOptimize(crowd[n - 1].pose().local.data());
+    } else {
+      for (int u = 0; u < n; ++u) single[u]->step(now[u]);
+      benchmark::DoNotOptimize(single[n - 1]->pose().local.data());
+    }
+    benchmark::ClobberMemory();
+  }
+  st.counters["per_user"] = benchmark::Counter(n, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);  // s
+  st.SetLabel(std::string(batched ? "one batch step" : "N single steps") + ", " + std::to_string(n) + " users");
+}
+
 using avatar::LoBSTrCompact;
 using avatar::LoBSTrCompactF16;
 using avatar::LoBSTrCompactQ8;
@@ -121,5 +155,12 @@ BENCHMARK_TEMPLATE(BM_Pipeline, LoBSTrPaperF16)->Name("lobstr/paper/streaming_f1
 BENCHMARK_TEMPLATE(BM_Pipeline, LoBSTrPaperQ8)->Name("lobstr/paper/streaming_q8")->Arg(0)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
+
+#define SPARSEBODY_CROWD(P, name)                                                                              \
+  BENCHMARK_TEMPLATE(BM_Crowd, P)->Name(name)->ArgsProduct({{1, 4, 16, 64}, {0, 1}})->ArgNames({"users", "batched"}) \
+      ->Unit(benchmark::kMicrosecond)
+SPARSEBODY_CROWD(LoBSTrCompact, "crowd/lobstr_compact");
+SPARSEBODY_CROWD(LoBSTrCompactQ8, "crowd/lobstr_compact_q8");
+SPARSEBODY_CROWD(LoBSTrCompactF16, "crowd/lobstr_compact_f16");
 
 BENCHMARK_MAIN();

@@ -335,6 +335,11 @@ void register_all() {
   SB_BATCH("GRU_37x256", GruOnly<256>, lobstr_table(256, 0, true), "gru")
   SB_BATCH("QuestSim_475_400_300_200_33", QuestSim, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
   SB_BATCH("QuestSim_475_400_300_200_33_f16weights", QuestSimF16, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
+  SB_BATCH("GRU_37x256_q8weights", GruOnlyQ8<256>, lobstr_table(256, 0, true), "gru")
+  SB_BATCH("LoBSTr_H256", LoBSTr<256>, lobstr_table(256, kLatent), "lobstr")
+  SB_BATCH("LoBSTr_H256_q8weights", LoBSTrQ8<256>, lobstr_table(256, kLatent), "lobstr")
+  SB_BATCH("N3P_Gup_H128_q8weights", GupQ8, n3p_table(45, 128, 201), "n3p_upper")
+  SB_BATCH("QuestSim_475_400_300_200_33_q8weights", QuestSimQ8, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
 #undef SB_BATCH
   // Storage speed-ups, same run: float time / f16 time and float time / q8 time (> 1: faster).
   for (const char* n : {"GRU_37x1024", "GRU_37x256", "LoBSTr_H1024", "LoBSTr_H256", "N3P_Gsig_H64", "N3P_Glo_H128",

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <doctest/doctest.h>
+#include <limits>
 
 #include "sparsebody/core/aligned_buffer.hpp"
 #include "sparsebody/nn/int8.hpp"
@@ -174,4 +175,41 @@ TEST_CASE("storage auto: q8 exactly where the build has a SIMD int8 kernel, else
 #if defined(__aarch64__)
   CHECK(c.storage == nn::Storage::q8);  // every ARM64 build has NEON
 #endif
+}
+
+TEST_CASE("int8 batched product: zero and NaN inputs inside a group of instances, full panels and tails, equal to singles") {
+  // gemv_batch_q8 shares weight loads across groups of instances (VNNI builds) and sends zero /
+  // non-finite inputs, left-over instances and tail rows to the single-instance path.
+  using W = nn::PanelMatrix<float, nn::q8>;
+  std::mt19937 rng(5);
+  std::normal_distribution<float> d(0.f, 1.f);
+  for (int rows : {128, 150, 300}) {
+    for (int cols : {37, 256}) {
+      std::vector<float> dense(static_cast<std::size_t>(rows) * cols), bias(static_cast<std::size_t>(nn::padded<float>(rows)));
+      for (float& v : dense) v = d(rng);
+      for (float& v : bias) v = d(rng);
+      const Packed packed(dense, rows, cols);
+      const W& m = packed.m;
+      for (int n : {1, 4, 7, 9}) {
+        std::vector<std::vector<float>> x(n, std::vector<float>(cols));
+        for (int i = 0; i < n; ++i)
+          for (float& v : x[i]) v = d(rng) * (i + 1);
+        if (n >= 4) std::fill(x[1].begin(), x[1].end(), 0.f);          // zero input: the bias
+        if (n >= 7) x[5][3] = std::numeric_limits<float>::quiet_NaN();  // NaN input: NaN rows
+        std::vector<std::vector<float>> yb(n, std::vector<float>(bias.size())), ys = yb;
+        std::vector<const float*> xp(n);
+        std::vector<float*> yp(n);
+        for (int i = 0; i < n; ++i) xp[i] = x[i].data(), yp[i] = yb[i].data();
+        nn::gemv_batch(m, n, xp.data(), bias.data(), yp.data());
+        for (int i = 0; i < n; ++i) {
+          nn::gemv(m, x[i].data(), bias.data(), ys[i].data());
+          CAPTURE(rows);
+          CAPTURE(cols);
+          CAPTURE(n);
+          CAPTURE(i);
+          REQUIRE(std::memcmp(ys[i].data(), yb[i].data(), sizeof(float) * bias.size()) == 0);
+        }
+      }
+    }
+  }
 }

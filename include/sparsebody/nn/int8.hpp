@@ -411,14 +411,132 @@ inline void q8_panel(const std::int8_t* __restrict w, int groups, const std::int
   }
 }
 
+// M instances through one full panel (NB = kPanelBatches, R = NB * L rows) with a dot-product
+// kernel (VNNI): each weight vector is loaded once per column group and multiplied with every
+// instance's input word, in sub-blocks of NVB vectors (M x NVB accumulators stay in registers).
+// The int32 sums are exact, and the epilogue is q8_panel's, so every instance's outputs equal
+// its own q8_panel call bit for bit.
+template <Q8Kernel Kern> constexpr int q8_batch_instances() {
+  return Kern == Q8Kernel::avx512_vnni ? 4 : Kern == Q8Kernel::avx_vnni ? 2 : 1;
+}
+template <Q8Kernel Kern> constexpr bool q8_batch_kernel() {
+#if SPARSEBODY_Q8_AVX512
+  if (Kern == Q8Kernel::avx512_vnni) return true;
+#endif
+#if SPARSEBODY_Q8_AVXVNNI
+  if (Kern == Q8Kernel::avx_vnni) return true;
+#endif
+  return false;
+}
+template <Q8Kernel Kern, int M>
+inline void q8_panel_batch(const std::int8_t* __restrict w, int groups, const std::int8_t* const* q, const float* sx,
+                           const float* __restrict scale, const std::int32_t* __restrict sum, const float* __restrict bias,
+                           float* const* y) noexcept {
+  constexpr int R = kPanelBatches * kLanes<float>;
+  constexpr int V = q8_kernel_rows(Kern);  // rows per vector
+  constexpr int NV = R / V;
+  constexpr int NVB = 4;
+  static_assert(NV % NVB == 0, "panel vectors must split into sub-blocks of 4");
+  [[maybe_unused]] const std::int8_t* qq[M];
+  for (int m = 0; m < M; ++m) qq[m] = q[m];
+#if SPARSEBODY_Q8_AVX512
+  if constexpr (Kern == Q8Kernel::avx512_vnni) {
+    for (int b0 = 0; b0 < NV; b0 += NVB) {
+      __m512i acc[M][NVB];
+      for (int m = 0; m < M; ++m)
+        for (int b = 0; b < NVB; ++b) acc[m][b] = _mm512_setzero_si512();
+      for (int g = 0; g < groups; ++g) {
+        __m512i ub[M];
+        for (int m = 0; m < M; ++m) ub[m] = _mm512_set1_epi32(q8_group_word(qq[m], g) ^ static_cast<std::int32_t>(0x80808080u));
+        const std::int8_t* wg = w + static_cast<std::size_t>(g) * R * 4 + b0 * 64;
+        for (int b = 0; b < NVB; ++b) {
+          const __m512i wv = _mm512_load_si512(reinterpret_cast<const void*>(wg + b * 64));
+          for (int m = 0; m < M; ++m) acc[m][b] = _mm512_dpbusd_epi32(acc[m][b], ub[m], wv);
+        }
+      }
+      for (int b = 0; b < NVB; ++b) {
+        const int r = (b0 + b) * 16;
+        const __m512i rs = _mm512_slli_epi32(_mm512_loadu_si512(reinterpret_cast<const void*>(sum + r)), 7);
+        const __m512 sc = _mm512_loadu_ps(scale + r);
+        const __m512 bb = bias ? _mm512_loadu_ps(bias + r) : _mm512_setzero_ps();
+        for (int m = 0; m < M; ++m) {
+          const __m512i s = _mm512_sub_epi32(acc[m][b], rs);
+          const __m512 f = _mm512_mul_ps(sc, _mm512_set1_ps(sx[m]));
+          _mm512_storeu_ps(y[m] + r, _mm512_fmadd_ps(_mm512_cvtepi32_ps(s), f, bb));
+        }
+      }
+    }
+    return;
+  }
+#endif
+#if SPARSEBODY_Q8_AVXVNNI
+  if constexpr (Kern == Q8Kernel::avx_vnni) {
+    for (int b0 = 0; b0 < NV; b0 += NVB) {
+      __m256i acc[M][NVB];
+      for (int m = 0; m < M; ++m)
+        for (int b = 0; b < NVB; ++b) acc[m][b] = _mm256_setzero_si256();
+      for (int g = 0; g < groups; ++g) {
+        __m256i ub[M];
+        for (int m = 0; m < M; ++m) ub[m] = _mm256_set1_epi32(q8_group_word(qq[m], g) ^ static_cast<std::int32_t>(0x80808080u));
+        const std::int8_t* wg = w + static_cast<std::size_t>(g) * R * 4 + b0 * 32;
+        for (int b = 0; b < NVB; ++b) {
+          const __m256i wv = _mm256_load_si256(reinterpret_cast<const __m256i*>(wg + b * 32));
+          for (int m = 0; m < M; ++m) acc[m][b] = _mm256_dpbusd_avx_epi32(acc[m][b], ub[m], wv);
+        }
+      }
+      for (int b = 0; b < NVB; ++b) {
+        const int r = (b0 + b) * 8;
+        const __m256i rs = _mm256_slli_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(sum + r)), 7);
+        const __m256 sc = _mm256_loadu_ps(scale + r);
+        const __m256 bb = bias ? _mm256_loadu_ps(bias + r) : _mm256_setzero_ps();
+        for (int m = 0; m < M; ++m) {
+          const __m256i s = _mm256_sub_epi32(acc[m][b], rs);
+          const __m256 f = _mm256_mul_ps(sc, _mm256_set1_ps(sx[m]));
+          _mm256_storeu_ps(y[m] + r, _mm256_fmadd_ps(_mm256_cvtepi32_ps(s), f, bb));
+        }
+      }
+    }
+    return;
+  }
+#endif
+  for (int m = 0; m < M; ++m) q8_panel<Kern, kPanelBatches>(w, groups, q[m], sx[m], scale, sum, bias, y[m]);
+}
+
+// The panels of one quantized input (gemv_q8 after the quantization): full panels of
+// kPanelBatches batches from row `from` on, then the tail batches.
+template <Q8Kernel Kern>
+inline void q8_panels(const PanelMatrix<float, q8>& W, const std::int8_t* q, float sx, const float* bias, float* y,
+                      int from = 0) noexcept {
+  constexpr int L = kLanes<float>;
+  constexpr int P = kPanelBatches * L;
+  const int prows = padded<float>(W.rows);
+  const int groups = q8_groups(W.cols);
+  const std::int8_t* w = W.data + static_cast<std::size_t>(from) * 4 * groups;
+  int r0 = from;
+  for (; r0 + P <= prows; r0 += P, w += static_cast<std::size_t>(P) * 4 * groups)
+    q8_panel<Kern, kPanelBatches>(w, groups, q, sx, W.row_scale + r0, W.row_sum + r0, bias ? bias + r0 : nullptr, y + r0);
+  const int rest = (prows - r0) / L;
+  const float* b = bias ? bias + r0 : nullptr;
+  const float* s = W.row_scale + r0;
+  const std::int32_t* rs = W.row_sum + r0;
+  switch (rest) {  // compile-time batch counts keep the accumulators in registers
+    case 0: break;
+    case 1: q8_panel<Kern, 1>(w, groups, q, sx, s, rs, b, y + r0); break;
+    case 2: q8_panel<Kern, 2>(w, groups, q, sx, s, rs, b, y + r0); break;
+    case 3: q8_panel<Kern, 3>(w, groups, q, sx, s, rs, b, y + r0); break;
+    case 4: q8_panel<Kern, 4>(w, groups, q, sx, s, rs, b, y + r0); break;
+    case 5: q8_panel<Kern, 5>(w, groups, q, sx, s, rs, b, y + r0); break;
+    case 6: q8_panel<Kern, 6>(w, groups, q, sx, s, rs, b, y + r0); break;
+    default: q8_panel<Kern, 7>(w, groups, q, sx, s, rs, b, y + r0); break;
+  }
+}
+
 }  // namespace detail
 
 // y[0 .. padded(rows)) = W x + bias with int8 weights, using kernel Kern (see top; default: the
 // build's best). A non-finite x gives NaN outputs (so guarded steps see it), an all-zero x the bias.
 template <Q8Kernel Kern = kQ8Kernel>
 inline void gemv_q8(const PanelMatrix<float, q8>& W, const float* x, const float* bias, float* y) noexcept {
-  constexpr int L = kLanes<float>;
-  constexpr int P = kPanelBatches * L;
   alignas(64) std::int8_t q[kQ8MaxCols + 4];
   const float sx = detail::quantize_input_q8<Kern != Q8Kernel::portable>(x, W.cols, q);
   const int prows = padded<float>(W.rows);
@@ -426,36 +544,69 @@ inline void gemv_q8(const PanelMatrix<float, q8>& W, const float* x, const float
     for (int r = 0; r < prows; ++r) y[r] = sx == 0.0f ? (bias ? bias[r] : 0.0f) : NAN;
     return;
   }
-  const int groups = q8_groups(W.cols);
-  const std::int8_t* w = W.data;
-  int r0 = 0;
-  for (; r0 + P <= prows; r0 += P, w += static_cast<std::size_t>(P) * 4 * groups)
-    detail::q8_panel<Kern, kPanelBatches>(w, groups, q, sx, W.row_scale + r0, W.row_sum + r0, bias ? bias + r0 : nullptr, y + r0);
-  const int rest = (prows - r0) / L;
-  const float* b = bias ? bias + r0 : nullptr;
-  const float* s = W.row_scale + r0;
-  const std::int32_t* rs = W.row_sum + r0;
-  switch (rest) {  // compile-time batch counts keep the accumulators in registers
-    case 0: break;
-    case 1: detail::q8_panel<Kern, 1>(w, groups, q, sx, s, rs, b, y + r0); break;
-    case 2: detail::q8_panel<Kern, 2>(w, groups, q, sx, s, rs, b, y + r0); break;
-    case 3: detail::q8_panel<Kern, 3>(w, groups, q, sx, s, rs, b, y + r0); break;
-    case 4: detail::q8_panel<Kern, 4>(w, groups, q, sx, s, rs, b, y + r0); break;
-    case 5: detail::q8_panel<Kern, 5>(w, groups, q, sx, s, rs, b, y + r0); break;
-    case 6: detail::q8_panel<Kern, 6>(w, groups, q, sx, s, rs, b, y + r0); break;
-    default: detail::q8_panel<Kern, 7>(w, groups, q, sx, s, rs, b, y + r0); break;
-  }
+  detail::q8_panels<Kern>(W, q, sx, bias, y);
 }
 
 inline void gemv(const PanelMatrix<float, q8>& W, const float* x, const float* bias, float* y) noexcept {
   gemv_q8<kQ8Kernel>(W, x, bias, y);
 }
 
-// Batched int8 product: one product per instance for now (each quantizes its own input); it does
-// not yet share weight loads across instances as the float/f16 gemv_batch does.
+// Batched int8 product, equal to n gemv_q8 calls bit for bit: each instance quantizes its own
+// input; with a dot-product kernel (AVX-512 VNNI: 4 instances, AVX-VNNI: 2) the full panels of
+// groups of instances share each weight load (q8_panel_batch); zero / non-finite inputs, the
+// instances left over and the tail rows take the single-instance path. Other kernels (AVX2
+// without VNNI: the sign trick needs the input per weight vector; NEON; portable) run one
+// product per instance.
+template <Q8Kernel Kern = kQ8Kernel>
+inline void gemv_batch_q8(const PanelMatrix<float, q8>& W, int n, const float* const* x, const float* bias,
+                          float* const* y) noexcept {
+  constexpr int M = detail::q8_batch_instances<Kern>();
+  if constexpr (!detail::q8_batch_kernel<Kern>() || M < 2) {
+    for (int i = 0; i < n; ++i) gemv_q8<Kern>(W, x[i], bias, y[i]);
+  } else {
+    constexpr int P = kPanelBatches * kLanes<float>;
+    alignas(64) std::int8_t q[M][kQ8MaxCols + 4];
+    const std::int8_t* qp[M];
+    float sx[M];
+    float* yp[M];
+    const int prows = padded<float>(W.rows);
+    const int groups = q8_groups(W.cols);
+    const int full = prows / P * P;  // rows in full panels
+    int m = 0;
+    auto flush = [&](int count) {
+      if (count == M) {
+        const std::int8_t* w = W.data;
+        for (int r0 = 0; r0 < full; r0 += P, w += static_cast<std::size_t>(P) * 4 * groups) {
+          float* yr[M];
+          for (int k = 0; k < M; ++k) yr[k] = yp[k] + r0;
+          detail::q8_panel_batch<Kern, M>(w, groups, qp, sx, W.row_scale + r0, W.row_sum + r0, bias ? bias + r0 : nullptr, yr);
+        }
+        for (int k = 0; k < M; ++k) detail::q8_panels<Kern>(W, qp[k], sx[k], bias, yp[k], full);
+      } else {
+        for (int k = 0; k < count; ++k) detail::q8_panels<Kern>(W, qp[k], sx[k], bias, yp[k]);
+      }
+    };
+    for (int i = 0; i < n; ++i) {
+      const float s = detail::quantize_input_q8<true>(x[i], W.cols, q[m]);
+      if (!(s > 0.0f)) {  // as gemv_q8: zero input gives the bias, NaN input NaN
+        for (int r = 0; r < prows; ++r) y[i][r] = s == 0.0f ? (bias ? bias[r] : 0.0f) : NAN;
+        continue;
+      }
+      qp[m] = q[m];
+      sx[m] = s;
+      yp[m] = y[i];
+      if (++m == M) {
+        flush(M);
+        m = 0;
+      }
+    }
+    flush(m);
+  }
+}
+
 inline void gemv_batch(const PanelMatrix<float, q8>& W, int n, const float* const* x, const float* bias,
                        float* const* y) noexcept {
-  for (int i = 0; i < n; ++i) gemv_q8<kQ8Kernel>(W, x[i], bias, y[i]);
+  gemv_batch_q8<kQ8Kernel>(W, n, x, bias, y);
 }
 
 }  // namespace sparsebody::nn
