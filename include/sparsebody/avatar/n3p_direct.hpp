@@ -169,6 +169,19 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   // push(frame) (any rate, PipelineFrontEnd) runs step once per 30 Hz tick.
   // One model frame (the caller did the resampling). `restart`: state reset before this frame.
   void step(const trackers::TrackerFrame& f, bool restart = false) noexcept {
+    if (!begin_step(f, restart)) return;
+    auto& p = pred_;
+    const T* x = p.after_signal(p.signal_network().step(p.begin_input()));
+    x = p.after_lower(p.lower_network().step(x));
+    end_step(p.finish(p.upper_network().step(x)));
+  }
+
+  // step() in two halves around the predictor's networks, for stepping many users together
+  // (avatar/n3p_batch.hpp): begin_step does everything before G_sig and returns false when the
+  // frame is done (no headset yet, or a frame the predictor cannot use); then the predictor's
+  // phases run (predictor().begin_input() is G_sig's input; after_signal, after_lower, finish),
+  // and end_step(finish's result) does the rest. Equal to step() bit for bit.
+  bool begin_step(const trackers::TrackerFrame& f, bool restart = false) noexcept {
     trackers::TrackerFrame head_only = f;  // the sanitizer looks after the headset only
     head_only.valid[1] = head_only.valid[2] = head_only.valid[3] = false;
     const trackers::SanitizedFrame& s = stream_.sanitize(head_only);
@@ -177,7 +190,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       auto_.break_window();
     }
     ++frames_;
-    if (!s.usable) return;  // no headset yet: no output (or the last one is kept)
+    if (!s.usable) return false;  // no headset yet: no output (or the last one is kept)
     std::array<trackers::PoseD, trackers::kTrackerCount> dev;
     std::array<bool, trackers::kTrackerCount> measured{s.measured[0], false, false, false};
     dev[0] = s.pose[0];
@@ -209,7 +222,12 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     }
     trackers_ = o;
     present_ = present;
-    if (!pred_.step(o, present)) return;
+    return pred_.begin(o, present) != nullptr;
+  }
+  void end_step(bool predicted) noexcept {
+    if (!predicted) return;
+    const features::n3p::TrackerSet& o = trackers_;
+    const std::array<bool, 3>& present = present_;
     out_.pose() = pred_.pose();  // same size: no allocation
     pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
     if (cfg_.anchor_head && head_ >= 0) {
@@ -254,6 +272,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   const pose::JointMap& joint_map() const noexcept { return map_; }
   const predict::N3PMeta& meta() const noexcept { return pred_.meta(); }
   const Predictor& predictor() const noexcept { return pred_; }
+  Predictor& predictor() noexcept { return pred_; }  // for the phases of begin_step / end_step
   double contact_probability(int foot) const noexcept { return pred_.contact(foot); }
   bool contact(int foot) const noexcept { return contact_probability(foot) > cfg_.contact_threshold; }
   bool foot_locked(int foot) const noexcept { return lock_[foot].state() != pose::FootLock::State::Free; }

@@ -107,11 +107,26 @@ class N3PPredictor {
   // frame was not usable (non-finite input, or the head absent before any start) or the networks
   // diverged (then the predictor restarts at the next frame); pose() keeps its last value.
   bool step(const n3p::TrackerSet& o_in, const std::array<bool, n3p::kTrackers>& present) noexcept {
-    n3p::TrackerSet o = o_in;
+    const T* x = begin(o_in, present);
+    if (!x) return false;
+    x = after_signal(sig_.step(x));
+    x = after_lower(lo_.step(x));
+    return finish(up_.step(x));
+  }
+
+  // step() in its four phases, for stepping many users' networks together (avatar/n3p_batch.hpp):
+  // begin gives G_sig's input (nullptr: the frame is not usable, step() returns false), and each
+  // phase takes the network's outputs for the last input and gives the next network's input;
+  // finish returns what step() returns. begin -> G_sig -> after_signal -> G_lo -> after_lower ->
+  // G_up -> finish equals step() bit for bit. Networks: signal_network(), lower_network(),
+  // upper_network().
+  const T* begin(const n3p::TrackerSet& o_in, const std::array<bool, n3p::kTrackers>& present) noexcept {
+    n3p::TrackerSet& o = o_;
+    o = o_in;
     for (int k = 0; k < n3p::kTrackers; ++k)
-      if (present[k] && !o[k].finite()) return false;
+      if (present[k] && !o[k].finite()) return nullptr;
     if (!started_) {
-      if (!present[0]) return false;
+      if (!present[0]) return nullptr;
       start(o[0]);
     }
     // §8.2: a missing tracker takes o*^t, predicted in h^{t-1}.
@@ -121,20 +136,30 @@ class N3PPredictor {
     }
     // z~^t = G_sig(inv(h^{t-1}) (x) o^t)
     n3p::tracker_input(h_, o, x_sig_);
-    const T* z = sig_.step(x_sig_);
+    return x_sig_;
+  }
+  const T* begin_input() const noexcept { return x_sig_; }  // G_sig's input after a begin() that gave one
+  const T* after_signal(const T* z) noexcept {
     std::copy(z, z + n3p::kZ, z_);
     // (g_lo^t, z*^{t+1}) = G_lo(z~^t, g_lo^{t-1})
     std::copy(z_, z_ + n3p::kZ, x_lo_);
     std::copy(glo_, glo_ + n3p::kGlo, x_lo_ + n3p::kZ);
-    const T* ylo = lo_.step(x_lo_);
+    return x_lo_;
+  }
+  const T* after_lower(const T* ylo) noexcept {
+    std::copy(ylo, ylo + n3p::kLoOut, ylo_);
     // h^t = h^{t-1} (x) dh^t
-    const features::HeadingFrame dh{static_cast<double>(ylo[n3p::kGloDelta]), static_cast<double>(ylo[n3p::kGloDelta + 1]),
-                                    static_cast<double>(ylo[n3p::kGloDelta + 2])};
-    const features::HeadingFrame h = h_ * dh;
+    const features::HeadingFrame dh{static_cast<double>(ylo_[n3p::kGloDelta]), static_cast<double>(ylo_[n3p::kGloDelta + 1]),
+                                    static_cast<double>(ylo_[n3p::kGloDelta + 2])};
+    h_next_ = h_ * dh;
     // (g_up^t, o*^{t+1}) = G_up(inv(h^t) (x) o^t, g_up^{t-1})
-    n3p::tracker_input(h, o, x_up_);
+    n3p::tracker_input(h_next_, o_, x_up_);
     std::copy(gup_, gup_ + n3p::kGup, x_up_ + n3p::kO);
-    const T* yup = up_.step(x_up_);
+    return x_up_;
+  }
+  bool finish(const T* yup) noexcept {
+    const T* ylo = ylo_;
+    const features::HeadingFrame& h = h_next_;
     if (!finite(ylo, n3p::kLoOut) || !finite(yup, n3p::kUpOut) || !finite(z_, n3p::kZ) || !h.finite()) {
       reset();  // diverged: restart from the default state next frame, keep the last pose
       ++restarts_;
@@ -149,6 +174,9 @@ class N3PPredictor {
     ++steps_;
     return true;
   }
+  nn::Network<SigNet>& signal_network() noexcept { return sig_; }
+  nn::Network<LoNet>& lower_network() noexcept { return lo_; }
+  nn::Network<UpNet>& upper_network() noexcept { return up_; }
 
   // Everything a step reads and writes (heading, g_lo, g_up, o*, z, GRU hidden states), so a caller
   // can run the predictor ahead from a saved state and come back (the combined control predictor,
@@ -255,6 +283,9 @@ class N3PPredictor {
   std::array<bool, n3p::kTrackers> substituted_{};
   long long steps_ = 0, restarts_ = 0;
   T x_sig_[n3p::kSigIn]{}, x_lo_[n3p::kLoIn]{}, x_up_[n3p::kUpIn]{};
+  n3p::TrackerSet o_{};               // this step's trackers (o*-substituted), between the phases
+  T ylo_[n3p::kLoOut]{};              // G_lo's outputs, between after_lower and finish
+  features::HeadingFrame h_next_;     // h^t, between after_lower and finish
   T z_[n3p::kZ]{}, zstar_[n3p::kZ]{}, glo_[n3p::kGlo]{}, gup_[n3p::kGup]{}, ostar_[n3p::kO]{};
   pose::BodyPose pose_;
   std::vector<Eigen::Matrix3d> R_;  // world rotations, sized once

@@ -1,0 +1,127 @@
+// Many users' Neural3Points direct-mode avatars stepped in one call (a social scene, one weight
+// set): N N3PPipeline instances share the three predictors' weights; per frame each does its own
+// sanitising, calibration and IK, and each of G_sig, G_lo and G_up runs once for all N users
+// (forward_batch), so each weight matrix is read once per frame instead of N times.
+//
+//   auto w = avatar::N3PDirect::load("examples/weights/n3p");
+//   avatar::N3PBatch<avatar::N3PDirect> crowd(w, 16);
+//   crowd.step(frames);                    // frames[i]: user i's tracker frame at the model rate
+//   crowd[3].world();                      // user 3's pose, as N3PPipeline::step would give it
+//
+// Every user's results equal an N3PPipeline of its own stepped with the same frames, bit for bit
+// (tests/n3p/test_batch.cpp), float, f16 and int8 storage. Model-rate frames (the caller
+// resamples, as for N3PPipeline::step). step() never allocates, throws or locks.
+#pragma once
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "sparsebody/avatar/n3p_direct.hpp"
+#include "sparsebody/nn/panel_matrix.hpp"
+
+namespace sparsebody::avatar {
+
+template <class Pipeline>
+class N3PBatch {
+ public:
+  using Predictor = std::remove_reference_t<decltype(std::declval<Pipeline&>().predictor())>;
+  using SigNet = typename Predictor::SigNet;
+  using LoNet = typename Predictor::LoNet;
+  using UpNet = typename Predictor::UpNet;
+  using T = typename SigNet::scalar;
+  using Weights = typename Pipeline::Weights;
+
+  // n users, 1 <= n <= nn::kBatchMax (64); cfg as for each N3PPipeline.
+  N3PBatch(const Weights& w, int n, N3PConfig cfg = {}) {
+    if (n < 1 || n > nn::kBatchMax)
+      throw std::invalid_argument("N3PBatch: " + std::to_string(n) + " users, expected 1.." + std::to_string(nn::kBatchMax));
+    for (int i = 0; i < n; ++i) users_.push_back(std::make_unique<Pipeline>(w, cfg));
+    io_ = std::make_unique<IO[]>(static_cast<std::size_t>(n));
+  }
+
+  int size() const noexcept { return static_cast<int>(users_.size()); }
+  Pipeline& operator[](int i) noexcept { return *users_[static_cast<std::size_t>(i)]; }
+  const Pipeline& operator[](int i) const noexcept { return *users_[static_cast<std::size_t>(i)]; }
+
+  // One model frame of every user: frames[i] is user i's; restart (optional) as step()'s.
+  void step(const trackers::TrackerFrame* frames, const bool* restart = nullptr) noexcept {
+    int who[nn::kBatchMax];
+    int m = 0;
+    for (int i = 0; i < size(); ++i)
+      if (users_[i]->begin_step(frames[i], restart != nullptr && restart[i])) who[m++] = i;
+    if (m == 0) return;
+    nn::Network<SigNet>* sig[nn::kBatchMax];
+    nn::Network<LoNet>* lo[nn::kBatchMax];
+    nn::Network<UpNet>* up[nn::kBatchMax];
+    const T* x[nn::kBatchMax];
+    T* y[nn::kBatchMax];
+    for (int k = 0; k < m; ++k) {
+      Predictor& p = users_[who[k]]->predictor();
+      sig[k] = &p.signal_network();
+      lo[k] = &p.lower_network();
+      up[k] = &p.upper_network();
+      x[k] = p.begin_input();
+    }
+    // G_sig, then G_lo, then G_up, each once for the m users; the phases in between per user.
+    run(sig, m, x, who, &IO::sig_in, &IO::sig_out, y);
+    for (int k = 0; k < m; ++k) x[k] = users_[who[k]]->predictor().after_signal(y[k]);
+    run(lo, m, x, who, &IO::lo_in, &IO::lo_out, y);
+    for (int k = 0; k < m; ++k) x[k] = users_[who[k]]->predictor().after_lower(y[k]);
+    run(up, m, x, who, &IO::up_in, &IO::up_out, y);
+    for (int k = 0; k < m; ++k) {
+      Pipeline& u = *users_[who[k]];
+      u.end_step(u.predictor().finish(y[k]));
+    }
+  }
+
+ private:
+  struct IO {
+    nn::PaddedVector<T, SigNet::in_size> sig_in;
+    nn::PaddedVector<T, SigNet::out_size> sig_out;
+    nn::PaddedVector<T, LoNet::in_size> lo_in;
+    nn::PaddedVector<T, LoNet::out_size> lo_out;
+    nn::PaddedVector<T, UpNet::in_size> up_in;
+    nn::PaddedVector<T, UpNet::out_size> up_out;
+  };
+  template <class Net, class In, class Out>
+  void run(nn::Network<Net>* const* nets, int m, const T* const* x, const int* who, In IO::*in_member, Out IO::*out_member,
+           T** y) noexcept {
+    In* in[nn::kBatchMax];
+    Out* out[nn::kBatchMax];
+    for (int k = 0; k < m; ++k) {
+      in[k] = &(io_[who[k]].*in_member);
+      out[k] = &(io_[who[k]].*out_member);
+    }
+    step_ptrs(nets, m, x, in, out, y);
+  }
+  template <class Net, class In, class Out>
+  static void step_ptrs(nn::Network<Net>* const* nets, int m, const T* const* x, In* const* in, Out* const* out, T** y) noexcept {
+    using S = typename Net::scalar;
+    const auto& w = nets[0]->weights();
+    typename Net::State* s[nn::kBatchMax];
+    const S* xin[nn::kBatchMax];
+    for (int k = 0; k < m; ++k) {
+      S* v = in[k]->data();
+      if (w.input_mean()) {  // as nn::Network::step, so the results match it bit for bit
+        for (int i = 0; i < Net::in_size; ++i) v[i] = (x[k][i] - w.input_mean()[i]) * w.input_inv_std()[i];
+      } else {
+        for (int i = 0; i < Net::in_size; ++i) v[i] = x[k][i];
+      }
+      xin[k] = v;
+      s[k] = &nets[k]->state();
+      y[k] = out[k]->data();
+    }
+    Net::forward_batch(w.params(), s, m, xin, y);
+    if (w.output_std())
+      for (int k = 0; k < m; ++k)
+        for (int i = 0; i < Net::out_size; ++i) y[k][i] = y[k][i] * w.output_std()[i] + w.output_mean()[i];
+  }
+
+  std::vector<std::unique_ptr<Pipeline>> users_;
+  std::unique_ptr<IO[]> io_;
+};
+
+}  // namespace sparsebody::avatar
