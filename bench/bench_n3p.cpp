@@ -7,11 +7,16 @@
 //   BM_N3PNet/{0,1,2}       G_sig, G_lo, G_up alone (one network step each)
 //   BM_N3PPipelineFrame     a whole 30 Hz frame of the direct-mode pipeline (resampling, checks,
 //                           calibration, predictor, foot pinning and arm IK); F16 and Q8 variants
+//   crowd/*                 N users per frame (users:N): one N3PBatch step (batched:1) against N
+//                           pipeline steps (batched:0), model-rate frames; per_user = time / N
 // Input: a synthetic user walking a circle and waving (no data files needed besides the weights).
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <memory>
+#include <vector>
 
+#include "sparsebody/avatar/n3p_batch.hpp"
 #include "sparsebody/avatar/n3p_direct.hpp"
 
 #include "n3p_default_weights.hpp"
@@ -111,6 +116,37 @@ void pipeline_frame(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations());
 }
+template <class P>
+void BM_Crowd(benchmark::State& state) {
+  const auto* w = weights<P>();
+  if (!w) {
+    state.SkipWithError("default weights not found");
+    return;
+  }
+  const int n = static_cast<int>(state.range(0));
+  const bool batched = state.range(1) != 0;
+  avatar::N3PBatch<P> crowd(*w, n);
+  std::vector<std::unique_ptr<P>> single;
+  for (int u = 0; u < n; ++u) single.push_back(std::make_unique<P>(*w));
+  std::vector<trackers::TrackerFrame> now(static_cast<std::size_t>(n));
+  int t = 0;
+  for (auto _ : state) {
+    for (int u = 0; u < n; ++u) {
+      now[u] = frame(t + 17 * u);
+      now[u].time = t / 30.0;
+    }
+    ++t;
+    if (batched) {
+      crowd.step(now.data());
+      benchmark::DoNotOptimize(crowd[n - 1].world().position.data());
+    } else {
+      for (int u = 0; u < n; ++u) single[u]->step(now[u]);
+      benchmark::DoNotOptimize(single[n - 1]->world().position.data());
+    }
+    benchmark::ClobberMemory();
+  }
+  state.counters["per_user"] = benchmark::Counter(n, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
 void BM_N3PPipelineFrame(benchmark::State& s) { pipeline_frame<Pipeline>(s); }
 void BM_N3PPipelineFrameF16(benchmark::State& s) { pipeline_frame<avatar::N3PDirectF16>(s); }
 void BM_N3PPipelineFrameQ8(benchmark::State& s) { pipeline_frame<avatar::N3PDirectQ8>(s); }
@@ -124,4 +160,10 @@ BENCHMARK(BM_N3PNet)->Arg(0)->Arg(1)->Arg(2);
 BENCHMARK(BM_N3PPipelineFrame);
 BENCHMARK(BM_N3PPipelineFrameF16);
 BENCHMARK(BM_N3PPipelineFrameQ8);
+BENCHMARK_TEMPLATE(BM_Crowd, avatar::N3PDirect)->Name("crowd/n3p_direct")->ArgsProduct({{1, 4, 16, 64}, {0, 1}})
+    ->ArgNames({"users", "batched"})->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Crowd, avatar::N3PDirectQ8)->Name("crowd/n3p_direct_q8")->ArgsProduct({{1, 4, 16, 64}, {0, 1}})
+    ->ArgNames({"users", "batched"})->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_Crowd, avatar::N3PDirectF16)->Name("crowd/n3p_direct_f16")->ArgsProduct({{1, 4, 16, 64}, {0, 1}})
+    ->ArgNames({"users", "batched"})->Unit(benchmark::kMicrosecond);
 BENCHMARK_MAIN();
