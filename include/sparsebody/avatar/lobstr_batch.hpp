@@ -9,8 +9,8 @@
 //   crowd[3].world();                      // user 3's pose, as LoBSTrPipeline::step would give it
 //
 // Every user's results equal a LoBSTrPipeline of its own stepped with the same frames, bit for
-// bit (tests/pipeline/test_batch.cpp), float, f16 and int8 storage (int8 still runs one product
-// per user: nn/int8.hpp). Model-rate frames: the caller resamples, as for LoBSTrPipeline::step
+// bit (tests/pipeline/test_batch.cpp), float, f16 and int8 storage (int8 shares weight loads with
+// the VNNI kernels only: nn/int8.hpp gemv_batch_q8). Model-rate frames: the caller resamples, as for LoBSTrPipeline::step
 // (frame times still matter: the sanitiser sees them). Streaming mode only (Window mode replays
 // a second of frames per step and gains nothing from sharing). step() never allocates, throws
 // or locks.

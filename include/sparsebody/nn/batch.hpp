@@ -1,6 +1,7 @@
 // N instances of one network sharing one weight set, stepped together (e.g. several avatars in a
 // scene): each weight matrix is streamed once per frame for all of them instead of once per
-// instance (float and f16 storage; q8 still runs one product per instance, see int8.hpp).
+// instance (float and f16 storage; q8 with the VNNI kernels, in groups of 4 / 2 instances, and
+// one product per instance elsewhere: int8.hpp gemv_batch_q8).
 //
 //   auto weights = nn::NetworkWeights<Net>::load("model.json", "lobstr");
 //   nn::NetworkBatch<Net> crowd(weights, 16);        // allocates the 16 states once
