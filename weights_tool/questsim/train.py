@@ -31,6 +31,11 @@ import os
 import re
 import time
 
+# One BLAS thread unless the caller says otherwise: with --threads 1 the run used 164 % CPU, numpy's
+# OpenBLAS starting its own threads (torch.set_num_threads does not reach it). Set before numpy loads.
+for _v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
+    os.environ.setdefault(_v, "1")
+
 import numpy as np
 import torch
 import torch.nn as tnn
