@@ -5,6 +5,7 @@
 
 #include "n3p/common.hpp"
 #include "support/alloc_counter.hpp"
+#include "support/crowd_sessions.hpp"
 #include "support/standing_stream.hpp"
 #include "sparsebody/avatar/n3p_batch.hpp"
 
@@ -89,34 +90,16 @@ TEST_CASE("n3p pipeline: no allocation per frame with the automatic calibration 
 // N3PBatch (avatar/n3p_batch.hpp): one call for 6 users, shipped weights in float and int8,
 // through calibrations, a lost controller, a NaN burst and a restart.
 TEST_CASE("n3p batch: a batch step allocates nothing") {
-  using sparsebody_test::Phase;
   constexpr int n = 6;
   const std::string prefix = std::string(SPARSEBODY_SOURCE_DIR) + "/examples/weights/n3p";
   avatar::N3PBatch<avatar::N3PDirectQ8> crowd(avatar::N3PDirectQ8::load(prefix), n);
   avatar::N3PBatch<avatar::N3PDirect> crowd_f(avatar::N3PDirect::load(prefix), n);
   std::vector<std::vector<trackers::TrackerFrame>> in;
-  for (int u = 0; u < n; ++u) {
-    in.push_back(sparsebody_test::session({{Phase::Stand, 1.5, 1.5 + 0.05 * u}, {Phase::Walk, 1.5, 1.5 + 0.05 * u}}, 30.0, 0.2 * u, false));
-    if (u == 2)
-      for (std::size_t i = 40; i < 60; ++i) in[u][i].valid[1] = false;
-    if (u == 3)
-      for (std::size_t i = 50; i < 53; ++i) in[u][i].pose[0].position.x = std::numeric_limits<float>::quiet_NaN();
-  }
-  trackers::TrackerFrame frames[n];
-  bool restart[n] = {};
-  for (int u = 0; u < n; ++u) frames[u] = in[u][0];
-  crowd.step(frames);
-  crowd_f.step(frames);
+  for (int u = 0; u < n; ++u) in.push_back(sparsebody_test::crowd_user_frames(u, false));
+  sparsebody_test::step_crowds(in, 0, 1, crowd, crowd_f);
   {
     sparsebody_test::AllocationCounter c;
-    for (std::size_t t = 1; t < in[0].size(); ++t) {
-      for (int u = 0; u < n; ++u) {
-        frames[u] = in[u][t];
-        restart[u] = t == 70 && u == 4;
-      }
-      crowd.step(frames, restart);
-      crowd_f.step(frames, restart);
-    }
+    sparsebody_test::step_crowds(in, 1, in[0].size(), crowd, crowd_f);
     CHECK(c.count() == 0);
   }
   for (int u = 0; u < n; ++u) CHECK(crowd[u].has_output());

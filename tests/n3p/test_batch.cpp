@@ -9,24 +9,11 @@
 #include <memory>
 
 #include "sparsebody/avatar/n3p_batch.hpp"
-#include "support/standing_stream.hpp"
+#include "support/crowd_sessions.hpp"
 
 using namespace sparsebody;
 
 namespace {
-
-std::vector<trackers::TrackerFrame> user_frames(int u) {
-  using sparsebody_test::Phase;
-  const double eye = 1.45 + 0.07 * u;
-  auto f = sparsebody_test::session({{u % 2 ? Phase::Walk : Phase::Stand, 0.7 + 0.1 * u, eye}, {Phase::Stand, 2.0, eye},
-                                     {Phase::Walk, 2.0, eye}, {Phase::Stand, 1.0, eye}},
-                                    30.0, 0.3 * u, false);
-  if (u == 2)
-    for (std::size_t i = 100; i < 130 && i < f.size(); ++i) f[i].valid[2] = false;
-  if (u == 3)
-    for (std::size_t i = 80; i < 84 && i < f.size(); ++i) f[i].pose[0].position.y = std::numeric_limits<float>::quiet_NaN();
-  return f;
-}
 
 template <class P>
 void check_batch_equals_singles(int n) {
@@ -37,7 +24,7 @@ void check_batch_equals_singles(int n) {
   std::size_t len = 1 << 30;
   for (int u = 0; u < n; ++u) {
     single.push_back(std::make_unique<P>(w));
-    in.push_back(user_frames(u % 6));
+    in.push_back(sparsebody_test::crowd_user_frames(u % 6, false));
     len = std::min(len, in.back().size());
   }
   std::vector<trackers::TrackerFrame> frames(static_cast<std::size_t>(n));

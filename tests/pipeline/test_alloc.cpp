@@ -7,6 +7,7 @@
 #include "common.hpp"
 #include "sparsebody/avatar/lobstr_batch.hpp"
 #include "support/alloc_counter.hpp"
+#include "support/crowd_sessions.hpp"
 #include "support/standing_stream.hpp"
 
 using namespace sparsebody;
@@ -70,33 +71,15 @@ TEST_CASE("pipeline frames allocate nothing with the automatic calibration findi
 // LoBSTrBatch (avatar/lobstr_batch.hpp): one call for 6 users, shipped weights in float and int8,
 // through calibrations, a lost controller, a NaN burst and a restart.
 TEST_CASE("a LoBSTr batch step allocates nothing") {
-  using sparsebody_test::Phase;
   constexpr int n = 6;
   avatar::LoBSTrBatch<avatar::LoBSTrCompactQ8> crowd(avatar::LoBSTrCompactQ8::load(SPARSEBODY_LOBSTR_WEIGHTS), n);
   avatar::LoBSTrBatch<avatar::LoBSTrCompact> crowd_f(avatar::LoBSTrCompact::load(SPARSEBODY_LOBSTR_WEIGHTS), n);
   std::vector<std::vector<trackers::TrackerFrame>> in;
-  for (int u = 0; u < n; ++u) {
-    in.push_back(sparsebody_test::session({{Phase::Stand, 1.5, 1.5 + 0.05 * u}, {Phase::Walk, 1.5, 1.5 + 0.05 * u}}, 30.0, 0.2 * u));
-    if (u == 2)
-      for (std::size_t i = 40; i < 60; ++i) in[u][i].valid[1] = false;
-    if (u == 3)
-      for (std::size_t i = 50; i < 53; ++i) in[u][i].pose[0].position.x = std::numeric_limits<float>::quiet_NaN();
-  }
-  trackers::TrackerFrame frames[n];
-  bool restart[n] = {};
-  for (int u = 0; u < n; ++u) frames[u] = in[u][0];
-  crowd.step(frames);
-  crowd_f.step(frames);
+  for (int u = 0; u < n; ++u) in.push_back(sparsebody_test::crowd_user_frames(u, true));
+  sparsebody_test::step_crowds(in, 0, 1, crowd, crowd_f);
   {
     sparsebody_test::AllocationCounter c;
-    for (std::size_t t = 1; t < in[0].size(); ++t) {
-      for (int u = 0; u < n; ++u) {
-        frames[u] = in[u][t];
-        restart[u] = t == 70 && u == 4;
-      }
-      crowd.step(frames, restart);
-      crowd_f.step(frames, restart);
-    }
+    sparsebody_test::step_crowds(in, 1, in[0].size(), crowd, crowd_f);
     CHECK(c.count() == 0);
   }
   for (int u = 0; u < n; ++u) CHECK(crowd[u].has_output());

@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "sparsebody/avatar/lobstr_pipeline.hpp"
-#include "sparsebody/nn/panel_matrix.hpp"
+#include "sparsebody/nn/batch.hpp"
 
 namespace sparsebody::avatar {
 
@@ -33,11 +33,11 @@ class LoBSTrBatch {
   using Weights = typename Pipeline::Weights;
 
   // n users, 1 <= n <= nn::kBatchMax (64); cfg as for each LoBSTrPipeline, mode Streaming.
-  LoBSTrBatch(std::shared_ptr<const Weights> w, int n, LoBSTrConfig cfg = {}) : weights_(std::move(w)) {
+  LoBSTrBatch(const std::shared_ptr<const Weights>& w, int n, LoBSTrConfig cfg = {}) {
     if (n < 1 || n > nn::kBatchMax)
       throw std::invalid_argument("LoBSTrBatch: " + std::to_string(n) + " users, expected 1.." + std::to_string(nn::kBatchMax));
     if (cfg.mode != RunMode::Streaming) throw std::invalid_argument("LoBSTrBatch: Streaming mode only");
-    for (int i = 0; i < n; ++i) users_.push_back(std::make_unique<Pipeline>(weights_, cfg));
+    for (int i = 0; i < n; ++i) users_.push_back(std::make_unique<Pipeline>(w, cfg));
     io_ = std::make_unique<IO[]>(static_cast<std::size_t>(n));
   }
 
@@ -47,33 +47,23 @@ class LoBSTrBatch {
 
   // One model frame of every user: frames[i] is user i's; restart (optional) as step()'s.
   void step(const trackers::TrackerFrame* frames, const bool* restart = nullptr) noexcept {
-    const auto& w = *weights_;
-    typename Net::State* s[nn::kBatchMax];
-    const T* xin[nn::kBatchMax];
+    nn::Network<Net>* nets[nn::kBatchMax];
+    const T* x[nn::kBatchMax];
+    T* in[nn::kBatchMax];
     T* y[nn::kBatchMax];
     int who[nn::kBatchMax];
     int m = 0;
     for (int i = 0; i < size(); ++i) {
       Pipeline& p = *users_[static_cast<std::size_t>(i)];
-      const T* x = p.begin_step(frames[i], restart != nullptr && restart[i]);
-      if (!x) continue;  // not usable: that user's frame is done
-      T* in = io_[i].input.data();
-      if (w.input_mean()) {  // as nn::Network::step, so the results match it bit for bit
-        for (int k = 0; k < Net::in_size; ++k) in[k] = (x[k] - w.input_mean()[k]) * w.input_inv_std()[k];
-      } else {
-        for (int k = 0; k < Net::in_size; ++k) in[k] = x[k];
-      }
-      s[m] = &p.network().state();
-      xin[m] = in;
+      x[m] = p.begin_step(frames[i], restart != nullptr && restart[i]);
+      if (!x[m]) continue;  // not usable: that user's frame is done
+      nets[m] = &p.network();
+      in[m] = io_[i].input.data();
       y[m] = io_[i].output.data();
       who[m++] = i;
     }
-    if (m > 0) Net::forward_batch(w.params(), s, m, xin, y);
-    for (int k = 0; k < m; ++k) {
-      if (w.output_std())
-        for (int j = 0; j < Net::out_size; ++j) y[k][j] = y[k][j] * w.output_std()[j] + w.output_mean()[j];
-      users_[static_cast<std::size_t>(who[k])]->end_step(y[k]);
-    }
+    nn::step_networks(nets, m, x, in, y);
+    for (int k = 0; k < m; ++k) users_[static_cast<std::size_t>(who[k])]->end_step(y[k]);
   }
 
  private:
@@ -81,7 +71,6 @@ class LoBSTrBatch {
     nn::PaddedVector<T, Net::in_size> input;
     nn::PaddedVector<T, Net::out_size> output;
   };
-  std::shared_ptr<const Weights> weights_;
   std::vector<std::unique_ptr<Pipeline>> users_;
   std::unique_ptr<IO[]> io_;
 };

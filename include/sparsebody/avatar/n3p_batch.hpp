@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "sparsebody/avatar/n3p_direct.hpp"
-#include "sparsebody/nn/panel_matrix.hpp"
+#include "sparsebody/nn/batch.hpp"
 
 namespace sparsebody::avatar {
 
@@ -57,6 +57,7 @@ class N3PBatch {
     nn::Network<LoNet>* lo[nn::kBatchMax];
     nn::Network<UpNet>* up[nn::kBatchMax];
     const T* x[nn::kBatchMax];
+    T* in[nn::kBatchMax];
     T* y[nn::kBatchMax];
     for (int k = 0; k < m; ++k) {
       Predictor& p = users_[who[k]]->predictor();
@@ -66,11 +67,14 @@ class N3PBatch {
       x[k] = p.begin_input();
     }
     // G_sig, then G_lo, then G_up, each once for the m users; the phases in between per user.
-    run(sig, m, x, who, &IO::sig_in, &IO::sig_out, y);
+    for (int k = 0; k < m; ++k) in[k] = io_[who[k]].sig_in.data(), y[k] = io_[who[k]].sig_out.data();
+    nn::step_networks(sig, m, x, in, y);
     for (int k = 0; k < m; ++k) x[k] = users_[who[k]]->predictor().after_signal(y[k]);
-    run(lo, m, x, who, &IO::lo_in, &IO::lo_out, y);
+    for (int k = 0; k < m; ++k) in[k] = io_[who[k]].lo_in.data(), y[k] = io_[who[k]].lo_out.data();
+    nn::step_networks(lo, m, x, in, y);
     for (int k = 0; k < m; ++k) x[k] = users_[who[k]]->predictor().after_lower(y[k]);
-    run(up, m, x, who, &IO::up_in, &IO::up_out, y);
+    for (int k = 0; k < m; ++k) in[k] = io_[who[k]].up_in.data(), y[k] = io_[who[k]].up_out.data();
+    nn::step_networks(up, m, x, in, y);
     for (int k = 0; k < m; ++k) {
       Pipeline& u = *users_[who[k]];
       u.end_step(u.predictor().finish(y[k]));
@@ -78,7 +82,7 @@ class N3PBatch {
   }
 
  private:
-  struct IO {
+  struct IO {  // per user: each network's normalised input and output (padded)
     nn::PaddedVector<T, SigNet::in_size> sig_in;
     nn::PaddedVector<T, SigNet::out_size> sig_out;
     nn::PaddedVector<T, LoNet::in_size> lo_in;
@@ -86,40 +90,6 @@ class N3PBatch {
     nn::PaddedVector<T, UpNet::in_size> up_in;
     nn::PaddedVector<T, UpNet::out_size> up_out;
   };
-  template <class Net, class In, class Out>
-  void run(nn::Network<Net>* const* nets, int m, const T* const* x, const int* who, In IO::*in_member, Out IO::*out_member,
-           T** y) noexcept {
-    In* in[nn::kBatchMax];
-    Out* out[nn::kBatchMax];
-    for (int k = 0; k < m; ++k) {
-      in[k] = &(io_[who[k]].*in_member);
-      out[k] = &(io_[who[k]].*out_member);
-    }
-    step_ptrs(nets, m, x, in, out, y);
-  }
-  template <class Net, class In, class Out>
-  static void step_ptrs(nn::Network<Net>* const* nets, int m, const T* const* x, In* const* in, Out* const* out, T** y) noexcept {
-    using S = typename Net::scalar;
-    const auto& w = nets[0]->weights();
-    typename Net::State* s[nn::kBatchMax];
-    const S* xin[nn::kBatchMax];
-    for (int k = 0; k < m; ++k) {
-      S* v = in[k]->data();
-      if (w.input_mean()) {  // as nn::Network::step, so the results match it bit for bit
-        for (int i = 0; i < Net::in_size; ++i) v[i] = (x[k][i] - w.input_mean()[i]) * w.input_inv_std()[i];
-      } else {
-        for (int i = 0; i < Net::in_size; ++i) v[i] = x[k][i];
-      }
-      xin[k] = v;
-      s[k] = &nets[k]->state();
-      y[k] = out[k]->data();
-    }
-    Net::forward_batch(w.params(), s, m, xin, y);
-    if (w.output_std())
-      for (int k = 0; k < m; ++k)
-        for (int i = 0; i < Net::out_size; ++i) y[k][i] = y[k][i] * w.output_std()[i] + w.output_mean()[i];
-  }
-
   std::vector<std::unique_ptr<Pipeline>> users_;
   std::unique_ptr<IO[]> io_;
 };

@@ -79,4 +79,31 @@ class NetworkBatch {
   std::unique_ptr<Memory[]> mem_;
 };
 
+// m Networks sharing one weight set (nets[k], each with its own state, e.g. one per avatar
+// pipeline) stepped together: x[k] normalised into in[k] (in_size values), one forward_batch, the
+// outputs denormalised in y[k] (out_size, padded buffers): what m Network::step calls give, bit for
+// bit. The avatar batches (avatar/lobstr_batch.hpp, n3p_batch.hpp) use it. No allocation.
+template <class Net>
+void step_networks(Network<Net>* const* nets, int m, const typename Net::scalar* const* x, typename Net::scalar* const* in,
+                   typename Net::scalar* const* y) noexcept {
+  using T = typename Net::scalar;
+  if (m <= 0) return;
+  const NetworkWeights<Net>& w = nets[0]->weights();
+  typename Net::State* s[kBatchMax];
+  const T* xin[kBatchMax];
+  for (int k = 0; k < m; ++k) {
+    if (w.input_mean()) {  // as Network::step
+      for (int i = 0; i < Net::in_size; ++i) in[k][i] = (x[k][i] - w.input_mean()[i]) * w.input_inv_std()[i];
+    } else {
+      for (int i = 0; i < Net::in_size; ++i) in[k][i] = x[k][i];
+    }
+    xin[k] = in[k];
+    s[k] = &nets[k]->state();
+  }
+  Net::forward_batch(w.params(), s, m, xin, y);
+  if (w.output_std())
+    for (int k = 0; k < m; ++k)
+      for (int i = 0; i < Net::out_size; ++i) y[k][i] = y[k][i] * w.output_std()[i] + w.output_mean()[i];
+}
+
 }  // namespace sparsebody::nn
