@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "sparsebody/avatar/batch_users.hpp"
 #include "sparsebody/avatar/lobstr_pipeline.hpp"
 #include "sparsebody/nn/batch.hpp"
 
@@ -33,17 +34,12 @@ class LoBSTrBatch {
   using Weights = typename Pipeline::Weights;
 
   // n users, 1 <= n <= nn::kBatchMax (64); cfg as for each LoBSTrPipeline, mode Streaming.
-  LoBSTrBatch(const std::shared_ptr<const Weights>& w, int n, LoBSTrConfig cfg = {}) {
-    if (n < 1 || n > nn::kBatchMax)
-      throw std::invalid_argument("LoBSTrBatch: " + std::to_string(n) + " users, expected 1.." + std::to_string(nn::kBatchMax));
-    if (cfg.mode != RunMode::Streaming) throw std::invalid_argument("LoBSTrBatch: Streaming mode only");
-    for (int i = 0; i < n; ++i) users_.push_back(std::make_unique<Pipeline>(w, cfg));
-    io_ = std::make_unique<IO[]>(static_cast<std::size_t>(n));
-  }
+  LoBSTrBatch(const std::shared_ptr<const Weights>& w, int n, LoBSTrConfig cfg = {})
+      : users_("LoBSTrBatch", n, w, streaming_only(cfg)) {}
 
-  int size() const noexcept { return static_cast<int>(users_.size()); }
-  Pipeline& operator[](int i) noexcept { return *users_[static_cast<std::size_t>(i)]; }
-  const Pipeline& operator[](int i) const noexcept { return *users_[static_cast<std::size_t>(i)]; }
+  int size() const noexcept { return users_.size(); }
+  Pipeline& operator[](int i) noexcept { return users_[i]; }
+  const Pipeline& operator[](int i) const noexcept { return users_[i]; }
 
   // One model frame of every user: frames[i] is user i's; restart (optional) as step()'s.
   void step(const trackers::TrackerFrame* frames, const bool* restart = nullptr) noexcept {
@@ -54,16 +50,16 @@ class LoBSTrBatch {
     int who[nn::kBatchMax];
     int m = 0;
     for (int i = 0; i < size(); ++i) {
-      Pipeline& p = *users_[static_cast<std::size_t>(i)];
+      Pipeline& p = users_[i];
       x[m] = p.begin_step(frames[i], restart != nullptr && restart[i]);
       if (!x[m]) continue;  // not usable: that user's frame is done
       nets[m] = &p.network();
-      in[m] = io_[i].input.data();
-      y[m] = io_[i].output.data();
+      in[m] = users_.io(i).input.data();
+      y[m] = users_.io(i).output.data();
       who[m++] = i;
     }
     nn::step_networks(nets, m, x, in, y);
-    for (int k = 0; k < m; ++k) users_[static_cast<std::size_t>(who[k])]->end_step(y[k]);
+    for (int k = 0; k < m; ++k) users_[who[k]].end_step(y[k]);
   }
 
  private:
@@ -71,8 +67,11 @@ class LoBSTrBatch {
     nn::PaddedVector<T, Net::in_size> input;
     nn::PaddedVector<T, Net::out_size> output;
   };
-  std::vector<std::unique_ptr<Pipeline>> users_;
-  std::unique_ptr<IO[]> io_;
+  static const LoBSTrConfig& streaming_only(const LoBSTrConfig& cfg) {
+    if (cfg.mode != RunMode::Streaming) throw std::invalid_argument("LoBSTrBatch: Streaming mode only");
+    return cfg;
+  }
+  BatchUsers<Pipeline, IO> users_;
 };
 
 }  // namespace sparsebody::avatar

@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "sparsebody/avatar/batch_users.hpp"
 #include "sparsebody/avatar/n3p_direct.hpp"
 #include "sparsebody/nn/batch.hpp"
 
@@ -35,23 +36,18 @@ class N3PBatch {
   using Weights = typename Pipeline::Weights;
 
   // n users, 1 <= n <= nn::kBatchMax (64); cfg as for each N3PPipeline.
-  N3PBatch(const Weights& w, int n, N3PConfig cfg = {}) {
-    if (n < 1 || n > nn::kBatchMax)
-      throw std::invalid_argument("N3PBatch: " + std::to_string(n) + " users, expected 1.." + std::to_string(nn::kBatchMax));
-    for (int i = 0; i < n; ++i) users_.push_back(std::make_unique<Pipeline>(w, cfg));
-    io_ = std::make_unique<IO[]>(static_cast<std::size_t>(n));
-  }
+  N3PBatch(const Weights& w, int n, N3PConfig cfg = {}) : users_("N3PBatch", n, w, cfg) {}
 
-  int size() const noexcept { return static_cast<int>(users_.size()); }
-  Pipeline& operator[](int i) noexcept { return *users_[static_cast<std::size_t>(i)]; }
-  const Pipeline& operator[](int i) const noexcept { return *users_[static_cast<std::size_t>(i)]; }
+  int size() const noexcept { return users_.size(); }
+  Pipeline& operator[](int i) noexcept { return users_[i]; }
+  const Pipeline& operator[](int i) const noexcept { return users_[i]; }
 
   // One model frame of every user: frames[i] is user i's; restart (optional) as step()'s.
   void step(const trackers::TrackerFrame* frames, const bool* restart = nullptr) noexcept {
     int who[nn::kBatchMax];
     int m = 0;
     for (int i = 0; i < size(); ++i)
-      if (users_[i]->begin_step(frames[i], restart != nullptr && restart[i])) who[m++] = i;
+      if (users_[i].begin_step(frames[i], restart != nullptr && restart[i])) who[m++] = i;
     if (m == 0) return;
     nn::Network<SigNet>* sig[nn::kBatchMax];
     nn::Network<LoNet>* lo[nn::kBatchMax];
@@ -60,23 +56,23 @@ class N3PBatch {
     T* in[nn::kBatchMax];
     T* y[nn::kBatchMax];
     for (int k = 0; k < m; ++k) {
-      Predictor& p = users_[who[k]]->predictor();
+      Predictor& p = users_[who[k]].predictor();
       sig[k] = &p.signal_network();
       lo[k] = &p.lower_network();
       up[k] = &p.upper_network();
       x[k] = p.begin_input();
     }
     // G_sig, then G_lo, then G_up, each once for the m users; the phases in between per user.
-    for (int k = 0; k < m; ++k) in[k] = io_[who[k]].sig_in.data(), y[k] = io_[who[k]].sig_out.data();
+    for (int k = 0; k < m; ++k) in[k] = users_.io(who[k]).sig_in.data(), y[k] = users_.io(who[k]).sig_out.data();
     nn::step_networks(sig, m, x, in, y);
-    for (int k = 0; k < m; ++k) x[k] = users_[who[k]]->predictor().after_signal(y[k]);
-    for (int k = 0; k < m; ++k) in[k] = io_[who[k]].lo_in.data(), y[k] = io_[who[k]].lo_out.data();
+    for (int k = 0; k < m; ++k) x[k] = users_[who[k]].predictor().after_signal(y[k]);
+    for (int k = 0; k < m; ++k) in[k] = users_.io(who[k]).lo_in.data(), y[k] = users_.io(who[k]).lo_out.data();
     nn::step_networks(lo, m, x, in, y);
-    for (int k = 0; k < m; ++k) x[k] = users_[who[k]]->predictor().after_lower(y[k]);
-    for (int k = 0; k < m; ++k) in[k] = io_[who[k]].up_in.data(), y[k] = io_[who[k]].up_out.data();
+    for (int k = 0; k < m; ++k) x[k] = users_[who[k]].predictor().after_lower(y[k]);
+    for (int k = 0; k < m; ++k) in[k] = users_.io(who[k]).up_in.data(), y[k] = users_.io(who[k]).up_out.data();
     nn::step_networks(up, m, x, in, y);
     for (int k = 0; k < m; ++k) {
-      Pipeline& u = *users_[who[k]];
+      Pipeline& u = users_[who[k]];
       u.end_step(u.predictor().finish(y[k]));
     }
   }
@@ -90,8 +86,7 @@ class N3PBatch {
     nn::PaddedVector<T, UpNet::in_size> up_in;
     nn::PaddedVector<T, UpNet::out_size> up_out;
   };
-  std::vector<std::unique_ptr<Pipeline>> users_;
-  std::unique_ptr<IO[]> io_;
+  BatchUsers<Pipeline, IO> users_;
 };
 
 }  // namespace sparsebody::avatar

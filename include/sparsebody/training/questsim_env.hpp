@@ -297,10 +297,11 @@ class QuestSimEnv {
       Retarget::velocity(k.model, k.q_next, k.q_after, dt, k.v_after);
       k.qdd += (k.v_after - k.v_ref) / dt;
     }
-    dynamics::forward_kinematics(k.model, k.scratch, k.sim.q(), nullptr);  // world poses for the support
     k.scratch.has_ext = false;
     dynamics::rnea(k.model, k.scratch, k.sim.q(), k.sim.v(), k.qdd, k.tau_exp);
     k.root_need = k.root_left = S(k.tau_exp.template head<6>().norm());
+    // The support needs world poses, which RNEA's kinematics leave out: only then a second pass.
+    if (cfg_.expert_support) dynamics::forward_kinematics(k.model, k.scratch, k.sim.q(), nullptr);
     if (cfg_.expert_support && stance_support(k)) {
       dynamics::rnea(k.model, k.scratch, k.sim.q(), k.sim.v(), k.qdd, k.tau_exp);
       k.scratch.clear_external();
