@@ -3,7 +3,9 @@
 //  - LibTorch (same network, one thread, inference mode) when built with it, and
 //  - a plain SIMD read of the same number of bytes: the memory-bandwidth floor for these sizes, and
 //  - "paired/": each network step interleaved with a plain read of its own weight buffers (the
-//    robust step/read ratio on a noisy machine).
+//    robust step/read ratio on a noisy machine), and
+//  - "limit/": the build's arithmetic limit for the same multiply-adds (compute_limit.hpp), the
+//    FLOP floor beside the memory floor.
 // Run: build/bench/bench_networks --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 // The storage table (float / f16 / q8 for every paper network, speed-ups printed at the end), e.g.
 // for a -DSPARSEBODY_MARCH=x86-64-v3 build beside the native one:
@@ -21,6 +23,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include "compute_limit.hpp"
 #include "nn/random_tables.hpp"
 #include "ratio_report.hpp"
 #include "sparsebody/core/aligned_buffer.hpp"
@@ -91,6 +94,22 @@ io::TensorTable mlp_table(std::vector<int> sizes) {
   for (std::size_t i = 0; i + 1 < sizes.size(); ++i)
     add_linear(t, "layers." + std::to_string(i) + ".", sizes[i], sizes[i + 1], rng, 0.05);
   return t;
+}
+// Multiply-adds of one step: the entries of the weight matrices (biases are adds only).
+std::int64_t step_macs(const io::TensorTable& t) {
+  std::int64_t n = 0;
+  for (const auto& kv : t.tensors())
+    if (kv.second.shape.size() == 2) n += kv.second.shape[0] * kv.second.shape[1];
+  return n;
+}
+// The least time N steps can take at this build's arithmetic limit (compute_limit.hpp): int8
+// products for q8 storage, float FMAs otherwise (f16 widens to float before its FMAs).
+void bench_limit(benchmark::State& st, const io::TensorTable& table, const char* name) {
+  const std::int64_t macs = st.range(0) * step_macs(table);
+  if (std::string(name).find("_q8") != std::string::npos)
+    sparsebody_bench::bench_compute_limit<true>(st, macs);
+  else
+    sparsebody_bench::bench_compute_limit<false>(st, macs);
 }
 std::size_t parameter_bytes(const io::TensorTable& t) {
   std::size_t n = 0;
@@ -330,7 +349,13 @@ void register_all() {
         ->Arg(n)->Unit(benchmark::kMicrosecond);                                                                  \
     add_ratio(std::string("batch / singles ") + NAME + " N=" + std::to_string(n),                                 \
               std::string("batch/") + NAME + "/" + std::to_string(n), std::string("singles/") + NAME + "/" + std::to_string(n)); \
-  }
+    benchmark::RegisterBenchmark("limit/" NAME, [](benchmark::State& s) { bench_limit(s, TABLE, NAME); })          \
+        ->Arg(n)->Unit(benchmark::kMicrosecond);                                                                  \
+    add_ratio(std::string("batch / arithmetic limit ") + NAME + " N=" + std::to_string(n),                        \
+              std::string("batch/") + NAME + "/" + std::to_string(n), std::string("limit/") + NAME + "/" + std::to_string(n)); \
+  }                                                                                                               \
+  add_ratio(std::string("arithmetic limit N=16 / one step ") + NAME + " (16 in <= 4x one needs <= 4)",              \
+            std::string("limit/") + NAME + "/16", std::string("batch/") + NAME + "/1");
   SB_BATCH("GRU_37x1024", GruOnly<1024>, lobstr_table(1024, 0, true), "gru")
   SB_BATCH("GRU_37x256", GruOnly<256>, lobstr_table(256, 0, true), "gru")
   SB_BATCH("QuestSim_475_400_300_200_33", QuestSim, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
@@ -338,9 +363,19 @@ void register_all() {
   SB_BATCH("GRU_37x256_q8weights", GruOnlyQ8<256>, lobstr_table(256, 0, true), "gru")
   SB_BATCH("LoBSTr_H256", LoBSTr<256>, lobstr_table(256, kLatent), "lobstr")
   SB_BATCH("LoBSTr_H256_q8weights", LoBSTrQ8<256>, lobstr_table(256, kLatent), "lobstr")
+  SB_BATCH("N3P_Gup_H128", Gup, n3p_table(45, 128, 201), "n3p_upper")
   SB_BATCH("N3P_Gup_H128_q8weights", GupQ8, n3p_table(45, 128, 201), "n3p_upper")
   SB_BATCH("QuestSim_475_400_300_200_33_q8weights", QuestSimQ8, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
 #undef SB_BATCH
+  // The most int8 can gain over float where both are bound by arithmetic (weights in L1/L2): the
+  // same 1 M multiply-adds as float FMAs and as the q8 kernel's int8 instructions.
+  for (int i8 = 0; i8 < 2; ++i8)
+    benchmark::RegisterBenchmark(i8 ? "limit/int8_1M" : "limit/f32_1M", [i8](benchmark::State& s) {
+      if (i8) sparsebody_bench::bench_compute_limit<true>(s, 1 << 20);
+      else sparsebody_bench::bench_compute_limit<false>(s, 1 << 20);
+    })->Unit(benchmark::kMicrosecond);
+  add_ratio("arithmetic limit f32 / int8, 1 M multiply-adds (the compute-bound q8 speed-up ceiling)", "limit/f32_1M",
+            "limit/int8_1M");
   // Storage speed-ups, same run: float time / f16 time and float time / q8 time (> 1: faster).
   for (const char* n : {"GRU_37x1024", "GRU_37x256", "LoBSTr_H1024", "LoBSTr_H256", "N3P_Gsig_H64", "N3P_Glo_H128",
                         "N3P_Gup_H128", "N3P_policy_868_256_256_72", "QuestSim_475_400_300_200_33"}) {
