@@ -109,7 +109,9 @@ TEST_CASE("n3p default weights: feet stay put and the head on the headset while 
                                        << 100 * head_hold << " cm from the calibrated headset");
   CHECK(held < 0.01);
   // the hold keeps the planted feet's orientation too: without it the toes turn about the pinned
-  // ankles as fast as with no hold at all (0.45 cm/s on this stand)
-  CHECK(held < 0.5 * free);
+  // ankles. Since the default body is sized to the headset on the first frame, the stand's
+  // calibration refines the size instead of restarting the predictor, so even without the hold
+  // this stand creeps only 0.15 cm/s (0.45 before); the hold still does better (0.13).
+  CHECK(held < free);
   CHECK(head_hold < 0.01);
 }

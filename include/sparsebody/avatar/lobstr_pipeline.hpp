@@ -143,11 +143,12 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     }
     ++frames_;
     if (!s.usable) { out_.invalidate(); return nullptr; }
+    const bool first = auto_.report().status != features::CalibrationStatus::Calibrated;
     if (auto_.push(f.time, s.pose, s.measured)) {  // a new calibration found while running
       const double k = auto_.calibration().scale / calib_.scale;
       calib_ = auto_.calibration();
       // A refinement (the size within 5 %): the feature history starts again (no velocity spike
-      // from the new offsets and scale), the GRU carries on, and the foot locks and the stillness
+      // from the new offsets and scale), the GRU carries on (but see `first`), and the foot locks and the stillness
       // detector move with the standard-scale world (x k on the ground), so the avatar's feet stay
       // where they are on the user's floor. A larger change restarts everything: the GRU's state
       // and the locks described another body (keeping them made feet skate on 1.90 m bodies).
@@ -156,6 +157,11 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
         reset_state();
       } else {
         feat_.reset();
+        // The first calibration (after the default body, sized to the headset) replaces the
+        // uncalibrated orientation offsets, so the GRU's state described other inputs: it starts
+        // again, the feet stay locked (offdist csv 5.65 -> 5.52 cm; restarting the locks as well
+        // gave 0.1-0.3 cm lower MPJPE but moved the standing feet: 2.3-2.9 cm/s).
+        if (first && auto_.report().status == features::CalibrationStatus::Calibrated) net_.reset();
         lock_[0].rescale(k);
         lock_[1].rescale(k);
         still_.rescale(k);

@@ -29,6 +29,13 @@
 // max_window) + 0.5 stillness (1 - 0.5 mean speed / 0.08 - 0.5 height range / 0.03); agreement =
 // (1 - 1/n) (1 - spread / 4 cm) for n >= 2 averaged windows, else 0. So one window gives at most
 // 0.7, agreeing windows approach 1.
+// Before the first estimate the default body is used, but never one smaller than the headset
+// shows (size_from_headset): at the first upright headset frame, if its eye height above the floor
+// is above the default body's, the body is enlarged to that eye height (a lower bound on the
+// stature: nobody's eyes are above their standing eye height; it is no calibration, and the status
+// stays Default). A tall user's first stand then refines the size (within 5 %: the pipelines carry
+// on) instead of changing it by 20 % (a restart that moved the feet of the 1.90 m bodies while they
+// stood). A seated or short user keeps the default body until they stand.
 // Floor: the reference space's y = 0 (OpenXR STAGE). estimate_floor, for apps whose floor is not
 // reliable: the stature cannot be seen then, so it is assumed (assumed_stature, 1.70 m) and the
 // floor is put 0.936 x 1.70 m below the accepted standing eye height; the report says so.
@@ -74,6 +81,7 @@ struct AutoCalibrationConfig {
   double agreement = 0.04;             // m of eye height: same stand (average) / higher (replace) / lower (skip)
   bool estimate_floor = false;         // floor from the standing eye height (stature assumed)
   double assumed_stature = 1.70;       // m, with estimate_floor
+  bool size_from_headset = true;       // the default body no smaller than the first upright headset frame shows (not with estimate_floor)
 };
 
 class AutoCalibration {
@@ -97,39 +105,8 @@ class AutoCalibration {
   bool push(double time, const Poses& pose, const Flags& valid) noexcept {
     ++frame_;
     if (!searching()) return false;
-    Sample s;
-    const bool ok = qualify(time, pose, valid, s);
-    remember(time, pose, valid);
-    if (!ok) return end_run();
-    if (held_ == kCapacity) {  // full: close the window before its first frame is dropped
-      if (seg_active_ && seg_start_ == run_ - held_) {
-        const bool changed = close_window();
-        used_stand_ = true;
-        append(s);
-        return changed;
-      }
-    }
-    append(s);
-    long long start = 0;
-    WindowStats w;
-    const bool still = trailing_window(start, w, early() ? cfg_.first_window : cfg_.min_window);
-    if (!still) {
-      used_stand_ = false;
-      return seg_active_ ? close_window() : false;
-    }
-    if (used_stand_) return false;
-    if (!seg_active_) seg_active_ = true, seg_start_ = start;
-    seg_end_ = run_ - 1;
-    if (at(seg_end_).t - at(seg_start_).t >= cfg_.max_window - 1e-9) {
-      used_stand_ = true;
-      return close_window();
-    }
-    // the provisional estimate: tried when the stand reaches first_window, then every quarter second
-    if (early() && est_n_ == 0 && at(seg_end_).t >= early_next_) {
-      early_next_ = at(seg_end_).t + 0.25;
-      return close_window(/*keep_open=*/true);
-    }
-    return false;
+    const bool sized = !sized_ && size_from_headset(pose, valid);
+    return search(time, pose, valid) || sized;
   }
 
   // Forget everything (estimate, counters, an explicit calibration) and search again: after the
@@ -138,6 +115,7 @@ class AutoCalibration {
     manual_ = false;
     est_n_ = 0;
     provisional_ = prov_open_ = false;
+    sized_ = false;
     early_next_ = -std::numeric_limits<double>::infinity();
     frame_ = 0;
     calib_ = Calibration::uncalibrated(devices_);
@@ -206,6 +184,71 @@ class AutoCalibration {
   double default_stature() const noexcept { return (standard_head_ + devices_.eye.y()) / cfg_.eye_height_ratio; }
 
  private:
+  // The standing-window search of push().
+  bool search(double time, const Poses& pose, const Flags& valid) noexcept {
+    Sample s;
+    const bool ok = qualify(time, pose, valid, s);
+    remember(time, pose, valid);
+    if (!ok) return end_run();
+    if (held_ == kCapacity) {  // full: close the window before its first frame is dropped
+      if (seg_active_ && seg_start_ == run_ - held_) {
+        const bool changed = close_window();
+        used_stand_ = true;
+        append(s);
+        return changed;
+      }
+    }
+    append(s);
+    long long start = 0;
+    WindowStats w;
+    const bool still = trailing_window(start, w, early() ? cfg_.first_window : cfg_.min_window);
+    if (!still) {
+      used_stand_ = false;
+      return seg_active_ ? close_window() : false;
+    }
+    if (used_stand_) return false;
+    if (!seg_active_) seg_active_ = true, seg_start_ = start;
+    seg_end_ = run_ - 1;
+    if (at(seg_end_).t - at(seg_start_).t >= cfg_.max_window - 1e-9) {
+      used_stand_ = true;
+      return close_window();
+    }
+    // the provisional estimate: tried when the stand reaches first_window, then every quarter second
+    if (early() && est_n_ == 0 && at(seg_end_).t >= early_next_) {
+      early_next_ = at(seg_end_).t + 0.25;
+      return close_window(/*keep_open=*/true);
+    }
+    return false;
+  }
+
+  // The first upright headset frame of a search with no estimate: enlarge the default body to its
+  // eye height when that is above the default's (and the stature plausible). True when that
+  // changed calibration(). Done once per search (recalibrate() allows it again).
+  bool size_from_headset(const Poses& pose, const Flags& valid) noexcept {
+    if (!cfg_.size_from_headset || cfg_.estimate_floor || est_n_ > 0 || report_.status != CalibrationStatus::Default) {
+      sized_ = true;
+      return false;
+    }
+    if (!valid[0] || !finite(pose[0])) return false;
+    const Eigen::Matrix3d R = pose[0].orientation.normalized().toRotationMatrix();
+    if (!(R(1, 1) > cfg_.min_up_y)) return false;  // not upright yet: wait for a frame that is
+    sized_ = true;
+    const double eye = pose[0].position.y() - calib_.floor;
+    const double stature = eye / cfg_.eye_height_ratio;
+    if (!(stature > default_stature() * 1.01) || !(stature <= cfg_.max_stature)) return false;
+    const double s = standard_head_ / (eye - devices_.eye.y());
+    if (!(s > 0) || !std::isfinite(s)) return false;
+    calib_.scale = s;
+    report_.stature = stature;
+    report_.eye_height = eye;
+    report_.scale = s;
+    report_.sized_from_headset = true;
+    std::snprintf(report_.message, sizeof report_.message,
+                  "no standing frame yet: default body sized to the headset (stature >= %.2f m)", stature);
+    return true;
+  }
+
+
   struct Sample {
     double t = 0;
     long long frame = 0;
@@ -379,7 +422,7 @@ class AutoCalibration {
         report_.first_time = at(a0).t, report_.last_time = at(a1).t;
         std::snprintf(report_.message, sizeof report_.message,
                       "refused: standing at %.1f-%.1f s gives stature %.2f m, outside [%.2f, %.2f] m: default body (stature %.2f m)",
-                      at(a0).t, at(a1).t, stature, cfg_.min_stature, cfg_.max_stature, default_stature());
+                      at(a0).t, at(a1).t, stature, cfg_.min_stature, cfg_.max_stature, report_.stature);
       } else {
         describe();
       }
@@ -417,6 +460,7 @@ class AutoCalibration {
     CalibrationReport& r = report_;
     r.status = CalibrationStatus::Calibrated;
     r.source = CalibrationSource::Automatic;
+    r.sized_from_headset = false;
     r.first_frame = at(a0).frame, r.last_frame = at(a1).frame;
     r.first_time = at(a0).t, r.last_time = at(a1).t;
     r.eye_height = eye;
@@ -435,7 +479,7 @@ class AutoCalibration {
   void describe() noexcept {
     CalibrationReport& r = report_;
     if (r.status != CalibrationStatus::Calibrated || r.source != CalibrationSource::Automatic) {
-      if (r.status == CalibrationStatus::Default)
+      if (r.status == CalibrationStatus::Default && !r.sized_from_headset)
         std::snprintf(r.message, sizeof r.message, "no standing frame yet: default body (stature %.2f m)", default_stature());
       return;
     }
@@ -473,6 +517,7 @@ class AutoCalibration {
   bool provisional_ = false;  // the estimate is the first stand's early one (first_window)
   double early_next_ = -std::numeric_limits<double>::infinity();  // next provisional try (s)
   bool prov_open_ = false;    // the provisional estimate's window is still open
+  bool sized_ = false;        // size_from_headset has looked at an upright headset frame
   long long seg_start_ = 0, seg_end_ = 0;
   // the estimate
   int est_n_ = 0;

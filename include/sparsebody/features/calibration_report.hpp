@@ -40,6 +40,10 @@ struct CalibrationReport {
   // The estimate is the first stand's early one (AutoCalibrationConfig::first_window): the window
   // is still open and replaces it when the user stops standing (or after max_window).
   bool provisional = false;
+  // Default status only: the default body was enlarged to the first upright headset frame's eye
+  // height (AutoCalibrationConfig::size_from_headset): a lower bound on the stature, not a
+  // calibration.
+  bool sized_from_headset = false;
   char message[192] = "no standing frame yet: default body";  // one line
 };
 
