@@ -171,9 +171,10 @@ TEST_CASE("auto calibration: before any stand the default body is no smaller tha
   auto walk = sparsebody_test::session({{Phase::Walk, 3.0, 1.78}, {Phase::Stand, 2.0, 1.80}});
   const Eigen::Quaterniond tilt(Eigen::AngleAxisd(1.2, Eigen::Vector3d::UnitX()));  // the headset not on yet
   for (int i = 0; i < 5; ++i) walk[i].pose[0].orientation = trackers::to_xr(Eigen::Quaterniond(trackers::to_eigen(walk[i].pose[0].orientation) * tilt));
+  walk[3].pose[0].position.y = std::numeric_limits<float>::quiet_NaN();  // and a NaN headset: not used either
   std::size_t i = 0;
   for (; i < 5; ++i) f.feed(walk[i]);
-  CHECK(f.changes == 0);  // waits for an upright headset
+  CHECK(f.changes == 0);  // waits for an upright, finite headset
   CHECK(f.cal.calibration().scale == 1.0);
   const float eye0 = walk[5].pose[0].position.y;
   f.feed(walk[i++]);

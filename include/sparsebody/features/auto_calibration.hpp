@@ -230,13 +230,12 @@ class AutoCalibration {
       return false;
     }
     if (!valid[0] || !finite(pose[0])) return false;
-    const Eigen::Matrix3d R = pose[0].orientation.normalized().toRotationMatrix();
-    if (!(R(1, 1) > cfg_.min_up_y)) return false;  // not upright yet: wait for a frame that is
+    if (!upright(pose[0].orientation.normalized().toRotationMatrix())) return false;  // wait for a frame that is
     sized_ = true;
     const double eye = pose[0].position.y() - calib_.floor;
     const double stature = eye / cfg_.eye_height_ratio;
     if (!(stature > default_stature() * 1.01) || !(stature <= cfg_.max_stature)) return false;
-    const double s = standard_head_ / (eye - devices_.eye.y());
+    const double s = scale_of_eye(eye);
     if (!(s > 0) || !std::isfinite(s)) return false;
     calib_.scale = s;
     report_.stature = stature;
@@ -248,6 +247,10 @@ class AutoCalibration {
     return true;
   }
 
+  // The headset's up axis near world up (its Y column's y).
+  bool upright(const Eigen::Matrix3d& R) const noexcept { return R(1, 1) > cfg_.min_up_y; }
+  // s = standard head-joint height / the user's (eye height above the floor - e.y).
+  double scale_of_eye(double eye) const noexcept { return standard_head_ / (eye - devices_.eye.y()); }
 
   struct Sample {
     double t = 0;
@@ -273,7 +276,7 @@ class AutoCalibration {
     if (!have_prev_time_ || !prev_valid_[0] || !(dt > 0) || dt > cfg_.max_frame_gap) return false;
     const Eigen::Quaterniond qh = pose[0].orientation.normalized();
     const Eigen::Matrix3d R = qh.toRotationMatrix();
-    if (!(R(1, 1) > cfg_.min_up_y) || !(std::abs(R(1, 2)) < cfg_.max_forward_y)) return false;  // up.y, forward.y = -Z.y
+    if (!upright(R) || !(std::abs(R(1, 2)) < cfg_.max_forward_y)) return false;  // up.y, forward.y = -Z.y
     const Eigen::Vector3d& p = pose[0].position;
     s.head_speed = (p - prev_pos_[0]).norm() / dt;
     if (!(s.head_speed < cfg_.max_head_speed)) return false;
@@ -454,7 +457,7 @@ class AutoCalibration {
     }
     calib_.floor = cfg_.estimate_floor ? est_eye_ - cfg_.eye_height_ratio * cfg_.assumed_stature : 0.0;
     const double eye = est_eye_ - calib_.floor;
-    calib_.scale = standard_head_ / (eye - devices_.eye.y());
+    calib_.scale = scale_of_eye(eye);
     if (std::isfinite(best_score[3])) calib_.set_pelvis_height(at(best[3]).pelvis_y, standard_hips_, devices_);
     const double agree = est_n_ >= 2 ? (1 - 1.0 / est_n_) * std::max(0.0, 1 - (est_hi_ - est_lo_) / cfg_.agreement) : 0.0;
     CalibrationReport& r = report_;
