@@ -149,6 +149,80 @@ TEST_CASE("foot lock hold: while the user stands still a lock survives contact o
   CHECK(l2.state() == pose::FootLock::State::Blending);
 }
 
+TEST_CASE("foot lock hold: a held-off foot the network keeps still locks again, one it moves stays free; no snap") {
+  const Vector3d hip(0, 0.9, 0);
+  Vector3d target;
+  // walking: locked, then released by drift (the network's toe 20 cm away): held off, contact on
+  auto walked_off = [&](pose::FootLock& l) {
+    l.update(true, Vector3d(0, 0.05, 0), hip, 1.0, 0.1, 0.042, target);
+    l.update(true, Vector3d(0.2, 0.09, 0), hip, 1.0, 0.1, 0.042, target);
+    for (int k = 0; k < 12; ++k) l.update(true, Vector3d(0.2, 0.09, 0), hip, 1.0, 0.1, 0.042, target);
+    REQUIRE(l.state() == pose::FootLock::State::Free);
+  };
+  pose::FootLock a(10);
+  walked_off(a);
+  a.hold(true);  // the user stands; the network creeps the toe 2 mm a frame (under 4 mm: the default)
+  REQUIRE(a.update(true, Vector3d(0.202, 0.09, 0), hip, 1.0, 0.1, 0.042, target));
+  CHECK(a.state() == pose::FootLock::State::Locked);
+  // locked where it was shown the frame before (0.2), then eased down to the toe height
+  CHECK(target.x() == doctest::Approx(0.2));
+  CHECK(target.y() < 0.09);
+  CHECK(target.y() > 0.042);
+  double prev = target.y();
+  for (int k = 2; k <= 10; ++k) {
+    REQUIRE(a.update(true, Vector3d(0.2 + 0.002 * k, 0.09, 0), hip, 1.0, 0.1, 0.042, target));
+    CHECK(target.x() == doctest::Approx(0.2));
+    CHECK(target.y() <= prev);
+    CHECK(target.y() == doctest::Approx(0.09 + (0.042 - 0.09) * (0.5 - 0.5 * std::cos(M_PI * k / 10))));
+    prev = target.y();
+  }
+  CHECK(target.isApprox(Vector3d(0.2, 0.042, 0)));
+  REQUIRE(a.update(true, Vector3d(0.3, 0.09, 0), hip, 1.0, 0.1, 0.042, target));
+  CHECK(target.isApprox(Vector3d(0.2, 0.042, 0)));  // and held
+  // the same foot stepping while the head stays (the network moves it 2 cm a frame): stays free
+  pose::FootLock b(10);
+  walked_off(b);
+  b.hold(true);
+  for (int k = 1; k <= 10; ++k) CHECK_FALSE(b.update(true, Vector3d(0.2 + 0.02 * k, 0.09, 0), hip, 1.0, 0.1, 0.042, target));
+  // a looser rearm speed locks it
+  pose::FootLock c(10);
+  c.set_hold_rearm_step(0.05);
+  walked_off(c);
+  c.hold(true);
+  CHECK(c.update(true, Vector3d(0.22, 0.09, 0), hip, 1.0, 0.1, 0.042, target));
+  CHECK(c.state() == pose::FootLock::State::Locked);
+  // without hold the old rule stands: held off until the contact goes off once
+  pose::FootLock d(10);
+  walked_off(d);
+  CHECK_FALSE(d.update(true, Vector3d(0.2, 0.09, 0), hip, 1.0, 0.1, 0.042, target));
+  // a lock made while moving does not settle (at the toe height at once, as before)
+  pose::FootLock e(10);
+  REQUIRE(e.update(true, Vector3d(0.1, 0.09, 0.2), hip, 1.0, 0.1, 0.042, target));
+  CHECK(target.isApprox(Vector3d(0.1, 0.042, 0.2)));
+}
+
+TEST_CASE("stillness: a calibration's rebase keeps the state; assume_still unless the headset moves") {
+  const double dt = 1.0 / 30;
+  const Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+  trackers::Stillness s;
+  for (int i = 0; i < 30; ++i) s.update(Vector3d(0, 1.6, 0), q, dt);
+  REQUIRE(s.still());
+  s.rebase();  // the calibrated headset jumps 10 cm with the new offsets: no speed spike, still
+  s.update(Vector3d(0.1, 1.6, 0), q, dt);
+  s.update(Vector3d(0.1, 1.6, 0), q, dt);
+  CHECK(s.still());
+  CHECK(s.speed() < 0.01);
+  trackers::Stillness t;  // 4 frames calm: not still yet, but the calibrator says the user stands
+  for (int i = 0; i < 4; ++i) t.update(Vector3d(0, 1.6, 0), q, dt);
+  REQUIRE_FALSE(t.still());
+  t.assume_still();
+  CHECK(t.still());
+  for (int i = 0; i < 30; ++i) t.update(Vector3d(1.0 * i * dt, 1.6, 0), q, dt);  // walks off: released
+  CHECK_FALSE(t.still());
+  t.assume_still();  // walking: refused
+  CHECK_FALSE(t.still());
+}
+
 TEST_CASE("stillness: still after 0.3 s of a calm headset, not while walking or turning on the spot, NaN resets") {
   trackers::Stillness s;
   const double dt = 1.0 / 30;

@@ -14,7 +14,13 @@
 // counts (SameFrame, LoBSTr) or only a later one does (NextFrame, Neural3Points).
 // hold(true) (the user stands still, trackers/stillness.hpp): a locked foot stays locked whatever
 // the contact flag or the drift says (only the reach limit still releases it), so the avatar's feet
-// do not creep while the user stands; the pipeline clears it on the first moving frame.
+// do not creep while the user stands; the pipeline clears it on the first moving frame. Under hold
+// a free foot in contact that the network moves less than `hold_rearm_step` per frame locks even
+// when held off (a drift release while walking otherwise left it following the network's creep
+// for the whole stand: 30 % of the feet in offdist's csv stands); a foot the network still moves
+// (stepping with the head still) stays free. A foot locked under hold locks where it was shown the
+// frame before (the prediction may just have jumped, e.g. a calibration restarted the network) and
+// settles to the lock height over `blend_frames` instead of snapping down.
 #pragma once
 #include <cmath>
 #include <initializer_list>
@@ -29,14 +35,17 @@ class FootLock {
   enum class Rearm { SameFrame, NextFrame };
 
   explicit FootLock(int blend_frames = 10, Rearm rearm = Rearm::SameFrame) : n_(blend_frames), rearm_(rearm) {}
-  void reset() noexcept { state_ = State::Free; hold_off_ = false; hold_ = false; }
+  void reset() noexcept { state_ = State::Free; hold_off_ = false; hold_ = false; shown_ = false; settle_ = n_; }
   void hold(bool h) noexcept { hold_ = h; }
   // The world's scale changed by k (a new calibration: positions are in the standard skeleton's
   // scale): the lock moves with the ground (x and z x k); heights are the body's, kept.
   void rescale(double k) noexcept {
-    for (Eigen::Vector3d* p : {&lock_, &from_, &current_}) p->x() *= k, p->z() *= k;
+    for (Eigen::Vector3d* p : {&lock_, &from_, &current_, &last_joint_}) p->x() *= k, p->z() *= k;
   }
   State state() const noexcept { return state_; }
+  // Under hold, how far (m per frame, the joint's units) the network's joint may move for a held-off
+  // free foot to lock; the pipelines set speed / frame rate. Kept by reset().
+  void set_hold_rearm_step(double metres) noexcept { rearm_step_ = metres; }
 
   // One frame: contact state, the predicted joint (toe) position, the hip position and the leg's
   // reach; a new lock is put at `lock_height`. Returns true when IK must place the joint at `target`.
@@ -55,8 +64,11 @@ class FootLock {
               const double* lock_height, Eigen::Vector3d& target) noexcept {
     const bool predicted_contact = contact;
     if (rearm_ == Rearm::NextFrame && !predicted_contact) hold_off_ = false;
+    const bool shown = shown_;  // current_ and last_joint_ are last frame's (set below on every path)
+    shown_ = true;
     if (hold_ && state_ == State::Locked && (lock_ - hip).norm() <= max_reach) {
-      target = current_ = lock_;
+      target = current_ = locked_target();
+      last_joint_ = joint;
       return true;
     }
     if (state_ == State::Locked && ((lock_ - hip).norm() > max_reach || (lock_ - joint).norm() > max_drift)) {
@@ -64,24 +76,32 @@ class FootLock {
       hold_off_ = true;  // do not re-lock until the contact goes off once
     }
     if (rearm_ == Rearm::SameFrame && !predicted_contact) hold_off_ = false;
+    if (hold_ && contact && state_ != State::Locked && shown && (joint - last_joint_).norm() <= rearm_step_ &&
+        (joint - hip).norm() <= max_reach)
+      hold_off_ = false;
+    last_joint_ = joint;
     if (hold_off_) contact = false;
     switch (state_) {
       case State::Free:
         if (contact) {
           state_ = State::Locked;
-          lock_ = joint;
+          // under hold: where the foot was shown last frame (the prediction may have jumped, e.g.
+          // after a calibration restarted the network), settling from its height
+          from_ = hold_ && shown ? current_ : joint;
+          lock_ = from_;
           if (lock_height) lock_.y() = *lock_height;
+          settle_ = hold_ ? 0 : n_;
         }
         break;
       case State::Locked:
         if (!contact) { state_ = State::Blending; from_ = lock_; k_ = 0; }
         break;
       case State::Blending:
-        if (contact) { state_ = State::Locked; lock_ = current_; }
+        if (contact) { state_ = State::Locked; lock_ = current_; settle_ = n_; }
         break;
     }
     if (state_ == State::Locked) {
-      target = current_ = lock_;
+      target = current_ = locked_target();
       return true;
     }
     if (state_ == State::Blending) {
@@ -95,12 +115,22 @@ class FootLock {
     return false;
   }
 
+  // The lock; for a foot locked in the air while still (settle_ < n_), eased down to its height.
+  Eigen::Vector3d locked_target() noexcept {
+    if (settle_ >= n_) return lock_;
+    ++settle_;
+    const double w = 0.5 - 0.5 * std::cos(M_PI * settle_ / n_);
+    return {lock_.x(), (1 - w) * from_.y() + w * lock_.y(), lock_.z()};
+  }
+
   int n_;
   Rearm rearm_;
   State state_ = State::Free;
-  int k_ = 0;
-  bool hold_off_ = false, hold_ = false;
+  int k_ = 0, settle_ = n_;  // settle_ < n_: a hold lock still easing down to its height
+  double rearm_step_ = 0.004;  // 0.12 m/s at 30 Hz
+  bool hold_off_ = false, hold_ = false, shown_ = false;  // shown_: current_ and last_joint_ are last frame's
   Eigen::Vector3d lock_ = Eigen::Vector3d::Zero(), from_ = Eigen::Vector3d::Zero(), current_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d last_joint_ = Eigen::Vector3d::Zero();  // the network's joint, last frame
 };
 
 }  // namespace sparsebody::pose

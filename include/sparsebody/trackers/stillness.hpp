@@ -28,6 +28,14 @@ class Stillness {
   bool still() const noexcept { return still_; }
   // Positions given in a scale that changed by k (a new calibration): keep the history consistent.
   void rescale(double k) noexcept { p_.x() *= k, p_.z() *= k; }
+  // The positions' frame changed (a new calibration's offsets and scale): the next frame starts
+  // the difference again; the filtered speeds and the still state carry on.
+  void rebase() noexcept { have_ = false; }
+  // The caller knows the user stands (the calibrator just accepted a standing window): still now,
+  // unless the filtered motion already says otherwise; leaving works as usual.
+  void assume_still() noexcept {
+    if (speed_ <= cfg_.leave_speed && yaw_rate_ <= cfg_.leave_yaw_rate) still_ = true;
+  }
   double speed() const noexcept { return speed_; }
   double yaw_rate() const noexcept { return yaw_rate_; }
 
