@@ -11,6 +11,9 @@ against the clip that drove it, the same way for every input path:
   csv      the device-realistic stream written as the demo's tracker CSV (--trackers-out) and read
            back through the CSV path with default options: no T-pose, the user moving from the first
            frame (the default body until then) and standing 2.5 s half-way through the clip
+  csvstop  the same, but the stand holds the frame nearest half-way where both feet are on the floor
+           (a real user stops on both feet; csv freezes whatever frame is half-way, often mid-stride,
+           and the truth then stands with a foot in the air)
   cmu      the CMU clips of Debian's assimp-testmodels (another performer, another skeleton)
 
 Metrics (12 joints mapped by role: hips, head, hands, thighs, knees, ankles, toes; metres -> cm):
@@ -169,7 +172,7 @@ def mode_inputs(mode, val_dir, every, tmp):
         return files, [], files
     if mode == "devices":
         return files, DEVICES, files
-    if mode == "csv":  # the user walks from the first frame and stands half-way through the clip
+    if mode in ("csv", "csvstop"):  # the user walks from the first frame and stands half-way through the clip
         return files, ["--devices"], files
     if mode == "cmu":
         return [f for f in CMU if os.path.exists(f)], [], [f for f in CMU if os.path.exists(f)]
@@ -179,6 +182,16 @@ def mode_inputs(mode, val_dir, every, tmp):
         bodies.main([val_dir, d, "--preset", mode, "--every", str(every)])
     f2 = sorted(glob.glob(os.path.join(d, "*.bvh")))
     return f2, DEVICES, f2
+
+
+def double_support_near_half(path):
+    """The time (s) of the frame nearest the clip's middle where both toes are in
+    contact (contact_labels); the middle itself when there is none."""
+    c = Clip(path)
+    both = np.flatnonzero(contact_labels(c, c.floor()).min(axis=1) > 0)
+    mid = c.frames // 2
+    f = int(both[np.argmin(np.abs(both - mid))]) if len(both) else mid
+    return f / c.fps
 
 
 def module_run(sb, src, model, opts, trackers_out=""):
@@ -208,12 +221,12 @@ def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None, sb=No
             if "--devices-stand" in opts_c:
                 hold = (float(opts_c[opts_c.index("--devices-stand") + 1]), 2.5)
         csv = os.path.join(tmp, "session.csv")
-        if mode == "csv":
-            half = 0.5 * Clip(s).frames / 30.0
+        if mode in ("csv", "csvstop"):
+            half = 0.5 * Clip(s).frames / 30.0 if mode == "csv" else double_support_near_half(s)
             opts_c += ["--devices-stand", f"{half:.3f}"]
             hold = (half, 2.5)
         if sb is not None:
-            if mode == "csv":
+            if mode in ("csv", "csvstop"):
                 kw = pymod.demo_options(opts_c)
                 sb.read_input(s, devices=True, device_seed=kw["device_seed"], devices_stand=kw["devices_stand"],
                               trackers_out=csv)
@@ -225,7 +238,7 @@ def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None, sb=No
                 continue
             m = compare_positions(res, t, hold=hold)
         else:
-            if mode == "csv":
+            if mode in ("csv", "csvstop"):
                 rc, log = run_demo(demo, s, os.path.join(tmp, "unused.bvh"), model, opts_c + extra, trackers_out=csv)
                 if rc != 0:
                     fails.append((s, log.strip().splitlines()[-1:]))

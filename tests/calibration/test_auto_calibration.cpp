@@ -367,3 +367,54 @@ TEST_CASE("LoBSTr pipeline: a calibration that barely changes the size keeps the
     CHECK(jump < 0.01);
   }
 }
+
+// Standing still after walking (issue 12: feet <= 1 cm/s), LoBSTr with the shipped weights: a session
+// that walks from frame 0 (default body), stops within one frame and stands 4 s (the first
+// calibration is found in that stand), then walks on. From 0.8 s into the stand both feet are held
+// and the toes do not move; without the stillness hold they creep. The calibration frame itself
+// does not make the feet jump.
+TEST_CASE("LoBSTr pipeline: after walking, the feet stay put while the user stands, through the first calibration") {
+  using P = avatar::LoBSTrPipeline<float, 256, 128>;
+  static auto w = P::load(std::string(SPARSEBODY_SOURCE_DIR) + "/examples/weights/lobstr_compact.weights.json");
+  const auto s = sparsebody_test::session({{Phase::Walk, 2.0, 1.62}, {Phase::Stand, 4.0, 1.62}, {Phase::Walk, 1.0, 1.62}});
+  struct Result { double still_speed = 0, calib_jump = 0; int held = 0, n = 0; bool calibrated_in_stand = false; };
+  auto run = [&](bool hold) {
+    avatar::LoBSTrConfig c;
+    c.hold_feet_when_still = hold;
+    P p(w, c);
+    const int toe[2] = {p.joint_map()[pose::Role::ToeL], p.joint_map()[pose::Role::ToeR]};
+    Result r;
+    Eigen::Vector3d prev[2];
+    bool have = false;
+    for (const auto& f : s) {
+      const auto before = p.calibration_report().status;
+      p.push(f);
+      if (!p.has_output()) continue;
+      Eigen::Vector3d now[2];
+      for (int k = 0; k < 2; ++k) now[k] = p.world().position[toe[k]] * p.user_scale();
+      const bool calibrated_now = before != p.calibration_report().status;
+      if (calibrated_now && f.time > 2.0 && f.time < 6.0) r.calibrated_in_stand = true;
+      if (have && calibrated_now)
+        for (int k = 0; k < 2; ++k) r.calib_jump = std::max(r.calib_jump, std::hypot(now[k].x() - prev[k].x(), now[k].z() - prev[k].z()));
+      if (have && f.time > 2.8 && f.time < 6.0) {
+        for (int k = 0; k < 2; ++k) r.still_speed += std::hypot(now[k].x() - prev[k].x(), now[k].z() - prev[k].z()) * 30.0 / 2;
+        r.held += p.foot_locked(0) && p.foot_locked(1);
+        ++r.n;
+      }
+      for (int k = 0; k < 2; ++k) prev[k] = now[k];
+      have = true;
+    }
+    REQUIRE(r.n > 60);
+    r.still_speed /= r.n;
+    return r;
+  };
+  const Result held = run(true), free = run(false);
+  MESSAGE("LoBSTr standing after walking: toes " << 100 * held.still_speed << " cm/s held (" << held.held << "/" << held.n
+          << " frames both feet locked), " << 100 * free.still_speed << " cm/s without the hold; toe jump on the calibration frame "
+          << 100 * held.calib_jump << " cm");
+  CHECK(held.calibrated_in_stand);
+  CHECK(held.still_speed < 0.01);
+  CHECK(held.held == held.n);
+  CHECK(held.still_speed < free.still_speed);
+  CHECK(held.calib_jump < 0.02);
+}
