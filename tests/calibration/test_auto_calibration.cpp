@@ -2,8 +2,12 @@
 // sessions: when a window is found, what it gives, refinement, refusal, and broken windows.
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <string>
 
 #include "sparsebody/avatar/lobstr_pipeline.hpp"
@@ -35,6 +39,30 @@ struct Feeder {
     for (const auto& f : fs) feed(f);
   }
   const features::CalibrationReport& r() const { return cal.report(); }
+};
+
+// Horizontal steps of the two toes between consecutive outputs of a LoBSTr pipeline, in the user's
+// metres (world times user scale, so a rescale that moves a foot shows as a step).
+struct ToeSteps {
+  int toe[2];
+  Eigen::Vector3d prev[2];
+  bool have = false;
+  template <class P>
+  explicit ToeSteps(const P& p) : toe{p.joint_map()[pose::Role::ToeL], p.joint_map()[pose::Role::ToeR]} {}
+  // This output's step of each toe from the previous one; nullopt on the first output.
+  template <class P>
+  std::optional<std::array<double, 2>> next(const P& p) {
+    std::array<double, 2> step{};
+    for (int k = 0; k < 2; ++k) {
+      const Eigen::Vector3d now = p.world().position[toe[k]] * p.user_scale();
+      step[k] = std::hypot(now.x() - prev[k].x(), now.z() - prev[k].z());
+      prev[k] = now;
+    }
+    const bool had = have;
+    have = true;
+    if (!had) return std::nullopt;
+    return step;
+  }
 };
 
 bool finite(const features::Calibration& c) {
@@ -341,23 +369,19 @@ TEST_CASE("LoBSTr pipeline: a calibration that barely changes the size keeps the
     INFO("eye height " << eye);
     P p(w);
     const auto s = sparsebody_test::session({{Phase::Stand, 3.0, eye}, {Phase::Walk, 1.0, eye}});
-    const int toe[2] = {p.joint_map()[pose::Role::ToeL], p.joint_map()[pose::Role::ToeR]};
-    Eigen::Vector3d prev[2];
-    bool have = false, changed = false;
+    ToeSteps toes(p);
+    bool changed = false;
     double jump = 0;
     for (const auto& f : s) {
       const auto before = p.calibration_report().status;
       p.push(f);
       if (!p.has_output()) continue;
-      Eigen::Vector3d now[2];
-      for (int k = 0; k < 2; ++k) now[k] = p.world().position[toe[k]] * p.user_scale();
-      if (have && before != p.calibration_report().status) {
+      const auto d = toes.next(p);
+      if (d && before != p.calibration_report().status) {
         changed = true;
-        for (int k = 0; k < 2; ++k) jump = std::max(jump, std::hypot(now[k].x() - prev[k].x(), now[k].z() - prev[k].z()));
+        jump = std::max({jump, (*d)[0], (*d)[1]});
       }
-      for (int k = 0; k < 2; ++k) prev[k] = now[k];
-      have = true;
-      REQUIRE(p.world().position[toe[0]].allFinite());
+      REQUIRE(p.world().position[toes.toe[0]].allFinite());
     }
     REQUIRE(changed);
     MESSAGE("toe jump on the calibration frame: " << jump << " m (user scale " << p.user_scale() << ")");
@@ -383,27 +407,21 @@ TEST_CASE("LoBSTr pipeline: after walking, the feet stay put while the user stan
     avatar::LoBSTrConfig c;
     c.hold_feet_when_still = hold;
     P p(w, c);
-    const int toe[2] = {p.joint_map()[pose::Role::ToeL], p.joint_map()[pose::Role::ToeR]};
+    ToeSteps toes(p);
     Result r;
-    Eigen::Vector3d prev[2];
-    bool have = false;
     for (const auto& f : s) {
       const auto before = p.calibration_report().status;
       p.push(f);
       if (!p.has_output()) continue;
-      Eigen::Vector3d now[2];
-      for (int k = 0; k < 2; ++k) now[k] = p.world().position[toe[k]] * p.user_scale();
+      const auto d = toes.next(p);
       const bool calibrated_now = before != p.calibration_report().status;
       if (calibrated_now && f.time > 2.0 && f.time < 6.0) r.calibrated_in_stand = true;
-      if (have && calibrated_now)
-        for (int k = 0; k < 2; ++k) r.calib_jump = std::max(r.calib_jump, std::hypot(now[k].x() - prev[k].x(), now[k].z() - prev[k].z()));
-      if (have && f.time > 2.8 && f.time < 6.0) {
-        for (int k = 0; k < 2; ++k) r.still_speed += std::hypot(now[k].x() - prev[k].x(), now[k].z() - prev[k].z()) * 30.0 / 2;
+      if (d && calibrated_now) r.calib_jump = std::max({r.calib_jump, (*d)[0], (*d)[1]});
+      if (d && f.time > 2.8 && f.time < 6.0) {
+        r.still_speed += ((*d)[0] + (*d)[1]) * 30.0 / 2;  // mean of the two toes, m/s at 30 Hz
         r.held += p.foot_locked(0) && p.foot_locked(1);
         ++r.n;
       }
-      for (int k = 0; k < 2; ++k) prev[k] = now[k];
-      have = true;
     }
     REQUIRE(r.n > 60);
     r.still_speed /= r.n;
