@@ -13,7 +13,9 @@ using namespace sparsebody::dynamics;
 using M = Model<double, 24, 72>;
 
 TEST_CASE("model JSON round-trips the default avatar") {
-  const M a = character::default_avatar<double>();
+  M a = character::default_avatar<double>();
+  a.bodies[8].armature = 0.03;  // optional field: written only when set
+  a.finalize();
   const M b = parse_model_json<double, 24, 72>(model_to_json(a), "avatar.json");
   REQUIRE(b.nb == a.nb);
   CHECK(b.nv == a.nv);
@@ -23,6 +25,7 @@ TEST_CASE("model JSON round-trips the default avatar") {
     CHECK(b.names[i] == a.names[i]);
     CHECK((b.bodies[i].I - a.bodies[i].I).norm() < 1e-12);
     CHECK(b.bodies[i].parent == a.bodies[i].parent);
+    CHECK(b.bodies[i].armature == a.bodies[i].armature);
   }
   // same dynamics
   Data<double, 24, 72> da(a), db(b);
@@ -62,6 +65,8 @@ TEST_CASE("model JSON validation names the file, the body and the field") {
   CHECK(e.find("'inertia'") != std::string::npos);
   e = error_of(doc(R"({"name":"Leg","parent":"Hips","joint":"spherical","mas":1,"inertia":[1,1,1,0,0,0]})"));
   CHECK(e.find("'mas'") != std::string::npos);
+  e = error_of(doc(R"({"name":"Leg","parent":"Hips","joint":"spherical","mass":1,"inertia":[1,1,1,0,0,0],"armature":-0.1})"));
+  CHECK(e.find("'armature'") != std::string::npos);
   e = error_of(doc(R"({"name":"Leg","parent":"Hips","joint":"spherical","mass":1,"inertia":[1,1,1,0,0,0],"shapes":[{"type":"box","half_extents":[0.1,0,0.1]}]})"));
   CHECK(e.find("shapes[0]") != std::string::npos);
   CHECK(e.find("half_extents") != std::string::npos);

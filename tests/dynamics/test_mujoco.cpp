@@ -106,6 +106,8 @@ static void cross_check(const Model& m, const char* tag, unsigned seed) {
     rnea(m, d, q, qd, a, tau_id);
     to_mj(m, R, a, md->qacc, &w0, &v0);
     mj_rne(mm, md, 1, rne.data());
+    // mj_rne uses the bodies' inertias only; MuJoCo's M (and mj_inverse) adds armature * qacc.
+    for (int k = 0; k < m.nv; ++k) rne[k] += mm->dof_armature[k] * md->qacc[k];
     to_mj(m, R, tau_id, buf.data(), nullptr, nullptr, true);
     num = den = 0;
     for (int k = 0; k < m.nv; ++k) { num += (buf[k] - rne[k]) * (buf[k] - rne[k]); den += rne[k] * rne[k]; }
@@ -147,4 +149,10 @@ TEST_CASE("MuJoCo 2.2.2 agrees on the 34-DoF humanoid3d-like tree") {
 }
 TEST_CASE("MuJoCo 2.2.2 agrees on the default avatar") {
   cross_check(character::default_avatar<double>(), "avatar", 12);
+}
+TEST_CASE("MuJoCo 2.2.2 agrees on the default avatar with joint armature") {
+  auto m = character::default_avatar<double>();
+  for (int i = 1; i < m.nb; ++i) m.bodies[i].armature = 0.01 + 0.01 * (i % 7);  // exported as MuJoCo's armature
+  m.finalize();
+  cross_check(m, "avatar_armature", 13);
 }

@@ -14,6 +14,10 @@
 // parent) the 6 entries are added to I^A itself, D = I^A + diag(k), and its solve is written for
 // a = a' + qdd: (I^A + diag(k)) a = tau - p^A + diag(k) a'.
 //
+// Armature (Body::armature, a joint's rotor inertia, MuJoCo's `armature`) is added to D_i the same
+// way, so M includes it (as in CRBA and RNEA). It lets bounded torques drive light segments (a
+// hand's twist, a toe) stably at a coarse time step.
+//
 // External loads (Data::fext, Data::Kext, filled by contact): f = f_ext - K_ext a enters pass 2 as
 // I^A_i = I_i + K_ext_i and p^A_i = p_i - f_ext_i.
 #pragma once
@@ -62,7 +66,9 @@ SPARSEBODY_INLINE bool spherical_articulated(const Body<S>& b, int i, Data<S, MB
   Mat3<S> D;
   SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c)
     SPARSEBODY_UNROLL for (int r = 0; r < 3; ++r) D(r, c) = IA(r, c);
-  D(0, 0) += d.implicit_diagonal(k); D(1, 1) += d.implicit_diagonal(k + 1); D(2, 2) += d.implicit_diagonal(k + 2);
+  D(0, 0) += d.implicit_diagonal(k) + b.armature;
+  D(1, 1) += d.implicit_diagonal(k + 1) + b.armature;
+  D(2, 2) += d.implicit_diagonal(k + 2) + b.armature;
   const Mat3<S> Dinv = inverse_sym3(D);
   d.Dinv[i] = Dinv;
   const bool ok = D(0, 0) > S(0) && Dinv.allFinite();
@@ -95,7 +101,7 @@ SPARSEBODY_INLINE bool revolute_articulated(const Body<S>& b, int i, Data<S, MB,
   const S ax = b.axis.x(), ay = b.axis.y(), az = b.axis.z();
   S Uc[6];
   for (int r = 0; r < 6; ++r) Uc[r] = IA(r, 0) * ax + IA(r, 1) * ay + IA(r, 2) * az;
-  const S D = ax * Uc[0] + ay * Uc[1] + az * Uc[2] + d.implicit_diagonal(b.v_index);
+  const S D = ax * Uc[0] + ay * Uc[1] + az * Uc[2] + d.implicit_diagonal(b.v_index) + b.armature;
   const bool ok = D > S(0);
   const S Dinv = S(1) / D;
   for (int r = 0; r < 6; ++r) d.U[i](r, 0) = Uc[r];

@@ -82,7 +82,8 @@ inline void composite_inertias(const Model<S, MB, MD>& m, const Data<S, MB, MD>&
   }
 }
 
-// H = M(q) into out.M (d: positions-only forward kinematics are written into it).
+// H = M(q) into out.M (d: positions-only forward kinematics are written into it), each joint's
+// armature (Body::armature) on its diagonal.
 template <class S, int MB, int MD>
 inline void crba(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecQ& q,
                  CrbaData<S, MB, MD>& out) {
@@ -114,6 +115,9 @@ inline void crba(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename M
       }
       case JointType::Fixed: break;
     }
+    // Armature: rotor inertia on the joint's own diagonal (the free root has none).
+    if (b.joint != JointType::Free)
+      for (int r = 0; r < joint_nv(b.joint); ++r) out.M(b.v_index + r, b.v_index + r) += b.armature;
   }
 }
 

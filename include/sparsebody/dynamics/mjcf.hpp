@@ -64,14 +64,20 @@ inline std::string to_mjcf(const Model<S, MB, MD>& m, const MjcfOptions& o = Mjc
       << double(I(0, 0)) << " " << double(I(1, 1)) << " " << double(I(2, 2)) << " " << double(I(0, 1)) << " "
       << double(I(0, 2)) << " " << double(I(1, 2)) << "\"/>\n";
     const double damp = double(b.damping) + (o.servo_damping ? double(b.kd) : 0.0);
+    auto armature = [&] {  // MuJoCo's armature is ours: rotor inertia on the joint's diagonal
+      if (b.armature != S(0)) x << " armature=\"" << double(b.armature) << "\"";
+    };
     switch (b.joint) {
       case JointType::Free: x << ind << "  <joint name=\"" << m.names[i] << "\" type=\"free\"/>\n"; break;
       case JointType::Spherical:
-        x << ind << "  <joint name=\"" << m.names[i] << "\" type=\"ball\" damping=\"" << damp << "\"/>\n";
+        x << ind << "  <joint name=\"" << m.names[i] << "\" type=\"ball\" damping=\"" << damp << "\"";
+        armature();
+        x << "/>\n";
         break;
       case JointType::Revolute:
         x << ind << "  <joint name=\"" << m.names[i] << "\" type=\"hinge\" axis=\"" << mjcf_vec(b.axis) << "\" damping=\""
           << damp << "\"";
+        armature();
         if (o.limits && b.limited) x << " range=\"" << double(b.lower) << " " << double(b.upper) << "\"";
         x << "/>\n";
         break;

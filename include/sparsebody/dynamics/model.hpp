@@ -37,6 +37,7 @@ struct Body {
   // Servo and joint parameters (per joint; spherical joints use the same gain on all 3 axes).
   S kp = S(0), kd = S(0);               // PD gains [N m / rad], [N m s / rad]
   S damping = S(0);                     // passive viscous damping, treated implicitly like kd
+  S armature = S(0);                    // rotor inertia [kg m^2] added to M's diagonal (MuJoCo's armature)
   S torque_limit = S(0);                // |tau| bound of the servo torque (norm for spherical); 0 = none
   S lower = S(0), upper = S(0);         // revolute range (rad) or spherical swing bound (rad, in upper)
   bool limited = false;                 // limits are stored and exported, not enforced by the step
@@ -155,7 +156,7 @@ struct Model {
       o.parent = b.parent; o.joint = b.joint; o.axis = b.axis.template cast<T>();
       o.pos = b.pos.template cast<T>(); o.rot = b.rot.template cast<T>();
       o.mass = T(b.mass); o.com = b.com.template cast<T>(); o.inertia = b.inertia.template cast<T>();
-      o.kp = T(b.kp); o.kd = T(b.kd); o.damping = T(b.damping); o.torque_limit = T(b.torque_limit);
+      o.kp = T(b.kp); o.kd = T(b.kd); o.damping = T(b.damping); o.armature = T(b.armature); o.torque_limit = T(b.torque_limit);
       o.lower = T(b.lower); o.upper = T(b.upper); o.limited = b.limited; o.num_shapes = b.num_shapes;
       for (int s = 0; s < b.num_shapes; ++s) {
         const Shape<S>& a = b.shapes[s];

@@ -12,6 +12,7 @@
 //       "mass": 7.0, "com": [0, 0.08, 0],           kg; centre of mass in the body frame
 //       "inertia": [ixx, iyy, izz, ixy, ixz, iyz],  kg m^2 about the com, body axes
 //       "kp": 200, "kd": 20, "damping": 0, "torque_limit": 300,   optional, >= 0
+//       "armature": 0,                              optional, >= 0 (kg m^2 per joint DoF)
 //       "limits": [lower, upper],                   optional (rad), stored and exported
 //       "shapes": [ {"type": "sphere", "pos": [..], "radius": r},
 //                   {"type": "capsule", "from": [..], "to": [..], "radius": r},
@@ -139,12 +140,13 @@ void json_inertia(const JsonCtx& bc, const nlohmann::json& o, Body<S>& b) {
   b.inertia = I.template cast<S>();
 }
 
-// Servo gains, damping, torque limit (all >= 0) and the optional ordered limits.
+// Servo gains, damping, armature, torque limit (all >= 0) and the optional ordered limits.
 template <class S>
 void json_servo(const JsonCtx& bc, const nlohmann::json& o, Body<S>& b) {
   b.kp = S(json_number(bc, o, "kp", 0, false, true));
   b.kd = S(json_number(bc, o, "kd", 0, false, true));
   b.damping = S(json_number(bc, o, "damping", 0, false, true));
+  b.armature = S(json_number(bc, o, "armature", 0, false, true));
   b.torque_limit = S(json_number(bc, o, "torque_limit", 0, false, true));
   if (o.contains("limits")) {
     const Eigen::Vector2d l = json_vec<2>(bc, o, "limits", Eigen::Vector2d::Zero(), true);
@@ -209,7 +211,7 @@ void json_add_body(const std::string& source, const nlohmann::json& o, size_t i,
   const std::string name = o["name"].get<std::string>();
   bc.where += " '" + name + "'";
   check_keys(bc, o, {"name", "parent", "joint", "axis", "pos", "quat", "mass", "com", "inertia", "kp", "kd",
-                     "damping", "torque_limit", "limits", "shapes"});
+                     "damping", "armature", "torque_limit", "limits", "shapes"});
   if (m.find(name) >= 0) bc.fail("name", "duplicate body name");
   Body<S> b;
   b.parent = json_parent(bc, o, m, i);
@@ -290,6 +292,7 @@ std::string model_to_json(const Model<S, MB, MD>& m, int indent = 1) {
     o["inertia"] = json::array({double(I(0, 0)), double(I(1, 1)), double(I(2, 2)), double(I(0, 1)), double(I(0, 2)), double(I(1, 2))});
     o["kp"] = double(b.kp); o["kd"] = double(b.kd); o["damping"] = double(b.damping);
     o["torque_limit"] = double(b.torque_limit);
+    if (b.armature != S(0)) o["armature"] = double(b.armature);
     if (b.limited) o["limits"] = json::array({double(b.lower), double(b.upper)});
     json shapes = json::array();
     for (int k = 0; k < b.num_shapes; ++k) {

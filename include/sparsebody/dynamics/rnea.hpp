@@ -36,7 +36,10 @@ inline void rnea(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename M
   tau.resize(m.nv);
   for (int i = m.nb - 1; i >= 0; --i) {
     project_force(m, i, d.f[i], tau);
-    const int pi = m.bodies[i].parent;
+    const Body<S>& b = m.bodies[i];
+    if (b.joint != JointType::Free && b.armature != S(0))  // rotor inertia: + armature qdd_i
+      for (int r = 0; r < joint_nv(b.joint); ++r) tau(b.v_index + r) += b.armature * qdd(b.v_index + r);
+    const int pi = b.parent;
     if (pi >= 0) d.f[pi] += d.X[i].apply_transpose_force(d.f[i]);
   }
 }
