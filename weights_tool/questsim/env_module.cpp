@@ -66,6 +66,10 @@ PYBIND11_MODULE(_questsim_env, m) {
       .def_readwrite("expert_support_height", &training::QuestSimEnvConfig::expert_support_height)
       .def_readwrite("expert_feedforward", &training::QuestSimEnvConfig::expert_feedforward)
       .def_readwrite("expert_lead", &training::QuestSimEnvConfig::expert_lead)
+      .def_readwrite("joint_armature", &training::QuestSimEnvConfig::joint_armature)
+      .def_readwrite("joint_damping", &training::QuestSimEnvConfig::joint_damping)
+      .def_readwrite("expert_pd_kp", &training::QuestSimEnvConfig::expert_pd_kp)
+      .def_readwrite("expert_pd_kd", &training::QuestSimEnvConfig::expert_pd_kd)
       .def_readwrite("residual_max_force", &training::QuestSimEnvConfig::residual_max_force)
       .def_readwrite("residual_max_torque", &training::QuestSimEnvConfig::residual_max_torque)
       .def_property("reward_mean_over_joints", [](const training::QuestSimEnvConfig& c) { return c.reward.mean_over_joints; },

@@ -161,6 +161,9 @@ def main(argv=None):
     ap.add_argument("--expert-wn", type=float, default=15.0, help="rad/s: the expert's tracking frequency")
     ap.add_argument("--expert-support-height", type=float, default=0.02,
                     help="m: feet this close to the floor carry the expert's root wrench (0: no stance support)")
+    ap.add_argument("--armature", type=float, default=0.05,
+                    help="kg m^2 of rotor inertia on every joint DoF (dynamics::Body::armature; QuestSimConfig::joint_armature "
+                         "must match at run time: 0.05 there by default)")
     ap.add_argument("--threads", type=int, default=1, help="torch threads")
     ap.add_argument("--env-threads", type=int, default=1)
     ap.add_argument("--seed", type=int, default=1)
@@ -173,6 +176,7 @@ def main(argv=None):
     paths = pick_clips(a.train_dir, a.motions, a.clips)
     clips = qe.load_clips(paths, a.n3p_lower)
     cfg = qe.Config()
+    cfg.joint_armature = a.armature
     cfg.expert = a.bc_iters > 0  # the privileged expert costs two RNEAs per step: only for DAgger
     cfg.expert_wn = a.expert_wn
     cfg.expert_support = a.expert_support_height > 0
@@ -306,7 +310,7 @@ def main(argv=None):
             os.replace(ckpt + ".tmp", ckpt)
             export(os.path.join(a.out, "questsim_policy.json"), model, stats, n_obs, n_act,
                    {"samples": samples, "iterations": it, "motions": a.motions, "clips": len(paths),
-                    "residual_at_export": res_f})
+                    "residual_at_export": res_f, "joint_armature": a.armature})
             plot(curve, os.path.join(a.out, "curve.png"))
 
 

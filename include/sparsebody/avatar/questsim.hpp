@@ -126,7 +126,7 @@ class QuestSimPipeline {
     return std::make_unique<QuestSimPipeline>(std::move(weights), report.stature, cfg);
   }
 
-  // A custom model (already at the user's scale; its joint damping is used as given).
+  // A custom model (already at the user's scale; its joint damping and armature are used as given).
   QuestSimPipeline(std::shared_ptr<const Weights> weights, const Model& model, double user_height, QuestSimConfig cfg)
       : cfg_(cfg), height_(S(user_height)), sim_(std::make_unique<Sim>(model)), obs_builder_(model),
         policy_(std::move(weights)), stream_(cfg.control_rate, cfg.sanitizer, cfg.max_gap) {
@@ -285,7 +285,10 @@ class QuestSimPipeline {
   static Model scaled_avatar(double h, const QuestSimConfig& cfg, character::AvatarOptions o) {
     if (!(std::isfinite(h) && h > 0)) throw std::invalid_argument("QuestSimPipeline: user height must be > 0");
     Model m = character::avatar_for_user_height<S, MB, MD>(h, o);
-    for (int i = 1; i < m.nb; ++i) m.bodies[i].damping = S(cfg.joint_damping);
+    for (int i = 1; i < m.nb; ++i) {
+      m.bodies[i].damping = S(cfg.joint_damping);
+      m.bodies[i].armature = S(cfg.joint_armature);
+    }
     m.finalize();
     return m;
   }

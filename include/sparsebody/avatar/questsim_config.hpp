@@ -18,6 +18,11 @@ struct QuestSimConfig {
   bool per_joint_torque_limits = true;
   double torque_scale = 200.0;     // N m per unit of policy output when !per_joint_torque_limits
   double joint_damping = 0.1;      // passive joint damping, N m s/rad (Appendix A: "friction of 0.1")
+  // Rotor inertia on every joint DoF, kg m^2 (dynamics::Body::armature): without it a torque held
+  // for a whole control step spins the light twist axes and toes past the velocity limit whenever
+  // the policy feeds back their motion (dynamics/README.md, "Armature"). The training environment
+  // uses the same value, so a policy trained there meets the same body here.
+  double joint_armature = 0.05;
   double eye_height_ratio = 0.936; // standing headset height / stature
   double min_height = 1.0, max_height = 2.4;  // heights accepted by user_height_from_headset (m)
   double fall_height_ratio = 0.5;  // root below this fraction of its standing height: fallen

@@ -1,7 +1,7 @@
 // Batched training environment for the QuestSim torque policy (Winkler et al. 2022, §3, App. A):
 // N simulated characters stepped per call, each tracking its own reference clip. The run-time
 // pipeline's pieces, unchanged: the same avatar model (character::avatar_for_user_height, joint
-// damping 0.1), the same Simulator in torque mode at 2 substeps of 1/72 s, the same observation
+// damping 0.1, armature 0.05 kg m^2), the same Simulator in torque mode at 2 substeps of 1/72 s, the same observation
 // builder (control/questsim_observation.hpp) and the same action mapping (tau = tau_max x
 // clamp(a, -1, 1) on every non-root DoF, control/questsim_actuation.hpp), so a policy trained here
 // behaves the same in avatar::QuestSimPipeline.
@@ -66,6 +66,7 @@ struct QuestSimEnvConfig {
   bool per_joint_torque_limits = true;  // as QuestSimConfig (control/questsim_actuation.hpp)
   double torque_scale = 200.0;    // N m per unit action when !per_joint_torque_limits
   double joint_damping = 0.1;     // N m s/rad
+  double joint_armature = 0.05;   // kg m^2 per joint DoF, as QuestSimConfig (dynamics::Body::armature)
   double fall_height_ratio = 0.5, fall_tilt = 1.2;  // the pipeline's fall rule (QuestSimConfig)
   double max_head_error = 0.5;    // m: early termination (tracking lost)
   int max_episode_steps = 300;    // control steps (8.3 s)
@@ -79,6 +80,9 @@ struct QuestSimEnvConfig {
   double expert_friction = 0.8, expert_cop_radius = 0.06, expert_yaw_radius = 0.03;  // -, m, m
   bool expert_feedforward = false;  // add the reference's acceleration a_ref to qdd*
   double expert_support_height = 0.02;  // m: a foot with a contact point this low is a support
+  // Nonzero: the expert is a plain PD servo to the reference instead, a = kp (q_target (-) q) + kd (v_ref - v)
+  // in units of each joint's torque limit (1/rad, s/rad): a diagnostic of what bounded torques can hold.
+  double expert_pd_kp = 0, expert_pd_kd = 0;
   QuestSimRewardConfig reward{};
 };
 
@@ -227,7 +231,7 @@ class QuestSimEnv {
     }
     static Model make_model(double h, const QuestSimEnvConfig& cfg) {
       Model m = character::avatar_for_user_height<S, MB, MD>(h);
-      for (int i = 1; i < m.nb; ++i) m.bodies[i].damping = S(cfg.joint_damping);
+      for (int i = 1; i < m.nb; ++i) { m.bodies[i].damping = S(cfg.joint_damping); m.bodies[i].armature = S(cfg.joint_armature); }
       m.finalize();
       return m;
     }
@@ -290,6 +294,12 @@ class QuestSimEnv {
     // expert did first, measured better without the feedforward) or frame t.
     Retarget::velocity(k.model, k.sim.q(), cfg_.expert_lead ? k.q_next : k.q_ref, S(1), k.err);
     k.qdd = wn * wn * k.err + S(2) * wn * (k.v_ref - k.sim.v());
+    if (cfg_.expert_pd_kp != 0) {  // no model: tau = tau_max (kp (q_target (-) q) + kd (v_ref - v))
+      k.tau_exp = k.tau_max.cwiseProduct(S(cfg_.expert_pd_kp) * k.err + S(cfg_.expert_pd_kd) * (k.v_ref - k.sim.v()));
+      k.root_need = k.root_left = 0;
+      write_expert_actions(i, k);
+      return;
+    }
     if (cfg_.expert_feedforward) {  // + a_ref = (v_ref,t+1 - v_ref,t) / dt (frames t+1, t+2 of the clip)
       const S dt = S(1.0 / cfg_.control_rate);
       k.retarget.to_q(k.model, (*clips_)[k.clip].pose[k.t + 2], k.q_after);
@@ -307,6 +317,10 @@ class QuestSimEnv {
       k.scratch.clear_external();
       k.root_left = S(k.tau_exp.template head<6>().norm());
     }
+    write_expert_actions(i, k);
+  }
+
+  void write_expert_actions(int i, const Character& k) noexcept {
     float* a = expert_.data() + std::size_t(i) * kActionSize;
     for (int j = 0; j < NJ; ++j) {
       const float x = float(k.tau_exp(6 + j) / k.tau_max(6 + j));
