@@ -64,11 +64,12 @@ class FootLock {
               const double* lock_height, Eigen::Vector3d& target) noexcept {
     const bool predicted_contact = contact;
     if (rearm_ == Rearm::NextFrame && !predicted_contact) hold_off_ = false;
-    const bool shown = shown_;  // current_ and last_joint_ are last frame's (set below on every path)
+    const bool shown = shown_;  // current_ and last_joint_ are last frame's (current_ set below on every path)
+    const Eigen::Vector3d prev_joint = last_joint_;
     shown_ = true;
+    last_joint_ = joint;
     if (hold_ && state_ == State::Locked && (lock_ - hip).norm() <= max_reach) {
       target = current_ = locked_target();
-      last_joint_ = joint;
       return true;
     }
     if (state_ == State::Locked && ((lock_ - hip).norm() > max_reach || (lock_ - joint).norm() > max_drift)) {
@@ -76,10 +77,9 @@ class FootLock {
       hold_off_ = true;  // do not re-lock until the contact goes off once
     }
     if (rearm_ == Rearm::SameFrame && !predicted_contact) hold_off_ = false;
-    if (hold_ && contact && state_ != State::Locked && shown && (joint - last_joint_).norm() <= rearm_step_ &&
+    if (hold_ && contact && state_ != State::Locked && shown && (joint - prev_joint).norm() <= rearm_step_ &&
         (joint - hip).norm() <= max_reach)
       hold_off_ = false;
-    last_joint_ = joint;
     if (hold_off_) contact = false;
     switch (state_) {
       case State::Free:
