@@ -165,12 +165,44 @@ TEST_CASE("QuestSim env: non-finite actions are zero torques, never a non-finite
   }
 }
 
-TEST_CASE("QuestSim env: the action mapping is the run-time pipeline's (same torque limits)") {
+TEST_CASE("QuestSim env: the action mapping and the joints are the run-time pipeline's (torque limits, damping, armature)") {
   Env env(clips(), meta(), {1.62}, 1);
   const auto lim = control::questsim_torque_limits(env.model(0), 1.62 / 1.75);
   const auto pipe = control::questsim_torque_limits(character::avatar_for_user_height<float, 24, 72>(1.62), 1.62 / 1.75);
   CHECK((lim - pipe).cwiseAbs().maxCoeff() == 0.f);
   CHECK(lim(6) > 0.f);
+  const avatar::QuestSimConfig run_time;
+  CHECK(run_time.joint_armature > 0);
+  for (int b = 1; b < env.model(0).nb; ++b) {
+    CHECK(env.model(0).bodies[b].armature == float(run_time.joint_armature));
+    CHECK(env.model(0).bodies[b].damping == float(run_time.joint_damping));
+  }
+}
+
+TEST_CASE("QuestSim env: neutral starts put the character where the pipeline resets it (neutral pose at rest under the headset)") {
+  training::QuestSimEnvConfig cfg;
+  cfg.neutral_start = 1.0;
+  Env env(clips(), meta(), std::vector<double>(4, 1.75), 3, cfg);
+  for (int i = 0; i < env.size(); ++i) {
+    const auto& m = env.model(i);
+    control::QuestSimSensorFrame<float> f;
+    for (int d = 0; d < 3; ++d) {
+      f[d].position = env.sensor(i)[d].position.cast<float>();
+      f[d].rotation = env.sensor(i)[d].rotation.cast<float>();
+    }
+    auto q = m.neutral_configuration();
+    control::questsim_stand_under_headset(f, q);
+    CHECK((env.simulator(i).q() - q).cwiseAbs().maxCoeff() == 0.f);
+    CHECK(env.simulator(i).v().cwiseAbs().maxCoeff() == 0.f);
+    CHECK(std::hypot(double(q(0)) - env.sensor(i)[0].position.x(), double(q(2)) - env.sensor(i)[0].position.z()) < 1e-6);
+  }
+  // and a share of them: with 0.5 some characters start in the reference state, some neutral
+  cfg.neutral_start = 0.5;
+  Env mixed(clips(), meta(), std::vector<double>(16, 1.75), 4, cfg);
+  int neutral = 0;
+  for (int i = 0; i < mixed.size(); ++i) neutral += mixed.simulator(i).v().cwiseAbs().maxCoeff() == 0.f;
+  CHECK(neutral > 0);
+  CHECK(neutral < mixed.size());
 }
 
 TEST_CASE("QuestSim env: step() with one thread never allocates (resets included, with and without the expert)") {
@@ -178,6 +210,7 @@ TEST_CASE("QuestSim env: step() with one thread never allocates (resets included
     CAPTURE(expert);
     training::QuestSimEnvConfig cfg;
     cfg.expert = expert;
+    cfg.neutral_start = expert ? 0.0 : 0.5;  // both kinds of restart
     Env env(clips(), meta(), std::vector<double>(4, 1.75), 2, cfg);
     const auto act = random_actions(4, 9, 0.05f);
     for (int t = 0; t < 5; ++t) env.step(act.data());

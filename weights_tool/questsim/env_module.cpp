@@ -57,6 +57,7 @@ PYBIND11_MODULE(_questsim_env, m) {
       .def(py::init<>())
       .def_readwrite("max_head_error", &training::QuestSimEnvConfig::max_head_error)
       .def_readwrite("max_episode_steps", &training::QuestSimEnvConfig::max_episode_steps)
+      .def_readwrite("neutral_start", &training::QuestSimEnvConfig::neutral_start)
       .def_readwrite("expert", &training::QuestSimEnvConfig::expert)
       .def_readwrite("expert_wn", &training::QuestSimEnvConfig::expert_wn)
       .def_readwrite("expert_support", &training::QuestSimEnvConfig::expert_support)

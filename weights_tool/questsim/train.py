@@ -164,6 +164,8 @@ def main(argv=None):
     ap.add_argument("--armature", type=float, default=0.05,
                     help="kg m^2 of rotor inertia on every joint DoF (dynamics::Body::armature; QuestSimConfig::joint_armature "
                          "must match at run time: 0.05 there by default)")
+    ap.add_argument("--neutral-start", type=float, default=0.25,
+                    help="share of episodes started in the pipeline's reset pose (neutral, at rest, under the headset)")
     ap.add_argument("--threads", type=int, default=1, help="torch threads")
     ap.add_argument("--env-threads", type=int, default=1)
     ap.add_argument("--seed", type=int, default=1)
@@ -177,6 +179,7 @@ def main(argv=None):
     clips = qe.load_clips(paths, a.n3p_lower)
     cfg = qe.Config()
     cfg.joint_armature = a.armature
+    cfg.neutral_start = a.neutral_start
     cfg.expert = a.bc_iters > 0  # the privileged expert costs two RNEAs per step: only for DAgger
     cfg.expert_wn = a.expert_wn
     cfg.expert_support = a.expert_support_height > 0

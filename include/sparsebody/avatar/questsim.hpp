@@ -71,8 +71,8 @@
 #include "sparsebody/control/fall_detector.hpp"
 #include "sparsebody/control/questsim_actuation.hpp"
 #include "sparsebody/control/questsim_observation.hpp"
+#include "sparsebody/control/questsim_standing.hpp"
 #include "sparsebody/features/calibration_report.hpp"
-#include "sparsebody/features/heading_frame.hpp"
 #include "sparsebody/networks/policy_nets.hpp"
 #include "sparsebody/nn/half.hpp"
 #include "sparsebody/nn/int8.hpp"
@@ -247,11 +247,7 @@ class QuestSimPipeline {
   // headset's heading (OpenXR: the device looks along its -Z), at rest. Used at start and by resets.
   void stand_under_headset(const control::QuestSimSensorFrame<S>& frame) noexcept {
     typename Sim::VecQ q = standing_q_;
-    const dynamics::Vec3<S> fwd = -frame[0].rotation.col(2);
-    const S theta = features::heading_angle(fwd, S(1e-6));
-    q(0) = frame[0].position.x();
-    q(2) = frame[0].position.z();
-    q(3) = std::cos(theta / 2); q(4) = S(0); q(5) = std::sin(theta / 2); q(6) = S(0);  // R_y(theta)
+    control::questsim_stand_under_headset(frame, q);
     sim_->set_state(q, zero_v_);
     tau_.setZero();
     sim_->torques() = tau_;

@@ -52,6 +52,7 @@
 #include "sparsebody/control/n3p_sim_retarget.hpp"
 #include "sparsebody/control/questsim_actuation.hpp"
 #include "sparsebody/control/questsim_observation.hpp"
+#include "sparsebody/control/questsim_standing.hpp"
 #include "sparsebody/dynamics/rnea.hpp"
 #include "sparsebody/dynamics/simulator.hpp"
 #include "sparsebody/predict/n3p_meta.hpp"
@@ -70,6 +71,10 @@ struct QuestSimEnvConfig {
   double fall_height_ratio = 0.5, fall_tilt = 1.2;  // the pipeline's fall rule (QuestSimConfig)
   double max_head_error = 0.5;    // m: early termination (tracking lost)
   int max_episode_steps = 300;    // control steps (8.3 s)
+  // Share of episodes that start where the run-time pipeline resets the character: the neutral pose
+  // at rest under the reference's headset (control/questsim_standing.hpp), instead of the reference
+  // state. Without them the policy never sees the pose it restarts from after a fall.
+  double neutral_start = 0.0;
   double residual_max_force = 0;  // N: root servo bound (0: off)
   double residual_max_torque = 0; // N m
   double residual_kp = 2000, residual_kd = 200, residual_kp_rot = 400, residual_kd_rot = 40;
@@ -275,7 +280,20 @@ class QuestSimEnv {
       k.lift = -lowest;
       reference_at(k, k.t);
     }
-    k.sim.set_state(k.q_ref, k.v_ref);
+    std::uniform_real_distribution<double> u01(0.0, 1.0);
+    if (cfg_.neutral_start > 0 && u01(k.rng) < cfg_.neutral_start) {
+      const auto& s = (*clips_)[k.clip].sensor[k.t];
+      control::QuestSimSensorFrame<S> f;
+      for (int d = 0; d < 3; ++d) {
+        f[d].position = s[d].position.template cast<S>();
+        f[d].rotation = s[d].rotation.template cast<S>();
+      }
+      k.q_after = k.model.neutral_configuration();
+      control::questsim_stand_under_headset(f, k.q_after);
+      k.sim.set_state(k.q_after, k.zero_v);
+    } else {
+      k.sim.set_state(k.q_ref, k.v_ref);
+    }
     k.tau.setZero();
     k.sim.torques() = k.tau;
     k.fy_prev = vertical_forces(k);
