@@ -166,6 +166,7 @@ def main(argv=None):
                          "must match at run time: 0.05 there by default)")
     ap.add_argument("--neutral-start", type=float, default=0.25,
                     help="share of episodes started in the pipeline's reset pose (neutral, at rest, under the headset)")
+    ap.add_argument("--max-head-error", type=float, default=0.5, help="m: an episode ends when the head is this far off the reference")
     ap.add_argument("--threads", type=int, default=1, help="torch threads")
     ap.add_argument("--env-threads", type=int, default=1)
     ap.add_argument("--seed", type=int, default=1)
@@ -180,6 +181,7 @@ def main(argv=None):
     cfg = qe.Config()
     cfg.joint_armature = a.armature
     cfg.neutral_start = a.neutral_start
+    cfg.max_head_error = a.max_head_error
     cfg.expert = a.bc_iters > 0  # the privileged expert costs two RNEAs per step: only for DAgger
     cfg.expert_wn = a.expert_wn
     cfg.expert_support = a.expert_support_height > 0
