@@ -613,7 +613,7 @@ PYBIND11_MODULE(sparsebody, m) {
   m.def("N3PPhysics", [](const std::string& w, const std::string& s, bool ik) { return create("n3p_physics", w, s, ik, "streaming"); },
         py::arg("weights") = "", py::arg("storage") = "auto", py::arg("foot_ik") = true);
 
-  py::class_<QuestSim>(m, "QuestSim", "QuestSim torque policy on the simulated avatar (explicit weights: no trained policy is shipped)")
+  py::class_<QuestSim>(m, "QuestSim", "QuestSim torque policy on the simulated avatar (explicit weights: examples/weights/questsim_policy.json is the shipped, weak, trained one)")
       .def(py::init([](const std::string& w, double h) {
              if (!(std::isfinite(h) && h > 0.5 && h < 2.5)) throw py::value_error("height must be a user height in metres (0.5-2.5)");
              return std::make_unique<QuestSim>(w, h);

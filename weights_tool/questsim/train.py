@@ -46,8 +46,8 @@ from .env import ROOT, load_module
 from .policy import HIDDEN
 
 DEFAULT_MOTIONS = r"raise-up|wave|bye|bow|guide|call|respond|walk"
-CREDIT = ("Trained on the Bandai-Namco-Research-Motiondataset (CC BY-NC-ND 4.0, Bandai Namco "
-          "Research Inc.): non-commercial use only.")
+CREDIT = "Bandai Namco Research Motion Dataset, Bandai Namco Research Inc., CC BY-NC 4.0"
+NON_COMMERCIAL = "Weights trained on the Bandai Namco Research Motion Dataset (CC BY-NC 4.0): non-commercial use only."
 
 
 class RunningStats:
@@ -111,7 +111,8 @@ def export(path, model, stats, n_obs, n_act, info):
     mean[-1], std[-1] = 1.75, 1.0  # o_user,scale: the user's height varies at run time, not in training
     meta = {"frame_rate": 36, "paper": "QuestSim (Winkler et al. 2022), Appendix A", "random_weights": False,
             "trained": True, "bodies": 21, "joint_dofs": n_act, "future_frames": 6,
-            "output": "tanh in [-1, 1], times 200 N m = joint torques", "credit": CREDIT, **info}
+            "output": "tanh in [-1, 1], times each joint's torque limit (control/questsim_actuation.hpp) = joint torques", "credit": CREDIT, "license": "CC BY-NC 4.0",
+            "non_commercial": NON_COMMERCIAL, **info}
     write_weights(path, nets.export_state_dict(model.actor), "questsim_policy", n_obs, n_act, meta=meta,
                   normalization={"input_mean": mean, "input_std": std})
 

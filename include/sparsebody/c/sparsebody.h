@@ -65,7 +65,7 @@ typedef enum sb_status {
   SB_ERR_CAPACITY = -5,       /* the caller's array is smaller than the joint count */
   SB_ERR_ORDER = -6,          /* call out of order (read before the first push) */
   SB_ERR_LOAD = -7,           /* a weights file missing or malformed (message names it) */
-  SB_ERR_NO_TRAINED_WEIGHTS = -8, /* QuestSim: no trained policy exists */
+  SB_ERR_NO_TRAINED_WEIGHTS = -8, /* QuestSim: not run through the C API yet */
   SB_ERR_UNSUPPORTED = -9,    /* e.g. weights whose network sizes this build does not include */
   SB_ERR_MISMATCH = -10,      /* weights of another model than the pipeline needs */
   SB_ERR_OUT_OF_MEMORY = -11,

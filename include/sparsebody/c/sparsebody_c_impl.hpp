@@ -7,7 +7,8 @@
 // cleared tag (not an unmapped page). Every entry point catches everything: no exception crosses.
 // Per frame (push, read, queries): no allocation; messages go into fixed buffers (snprintf).
 // Builds: LoBSTr compact (H 256, latent 128), Neural3Points direct and physics (the paper's sizes),
-// float weights. QuestSim: SB_ERR_NO_TRAINED_WEIGHTS (only random test weights exist).
+// float weights. QuestSim: SB_ERR_NO_TRAINED_WEIGHTS (not run through the C API yet; its weak trained
+// policy, examples/weights/questsim_policy.json, runs in C++ and Python).
 #pragma once
 #include <cmath>
 #include <cstdarg>
@@ -277,7 +278,7 @@ SPARSEBODY_API sb_status sb_weights_load(int32_t model, const char* path, sb_wei
   if (!path) return c::fail(nullptr, SB_ERR_NULL, "sb_weights_load: path is NULL");
   try {
     if (model == SB_MODEL_QUESTSIM)
-      return c::fail(nullptr, SB_ERR_NO_TRAINED_WEIGHTS, "sb_weights_load: QuestSim has no trained weights (only random test weights exist)");
+      return c::fail(nullptr, SB_ERR_NO_TRAINED_WEIGHTS, "sb_weights_load: QuestSim does not run through the C API yet (C++: avatar::QuestSimPipeline)");
     if (model != SB_MODEL_LOBSTR && model != SB_MODEL_N3P)
       return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_weights_load: unknown model %d", int(model));
     auto w = std::make_unique<sb_weights>();
@@ -377,7 +378,7 @@ SPARSEBODY_API sb_status sb_pipeline_create(const sb_weights* w, const sb_pipeli
     return c::fail(nullptr, SB_ERR_STRUCT_SIZE, "sb_pipeline_create: cfg version %u, this library is %u", cfg->version, SB_API_VERSION);
   const int kind = cfg->pipeline;
   if (kind == SB_PIPELINE_QUESTSIM)
-    return c::fail(nullptr, SB_ERR_NO_TRAINED_WEIGHTS, "sb_pipeline_create: QuestSim has no trained policy (only random test weights exist)");
+    return c::fail(nullptr, SB_ERR_NO_TRAINED_WEIGHTS, "sb_pipeline_create: QuestSim does not run through the C API yet (C++: avatar::QuestSimPipeline)");
   if (kind < SB_PIPELINE_LOBSTR || kind > SB_PIPELINE_N3P_PHYSICS)
     return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_pipeline_create: unknown pipeline %d", kind);
   for (int32_t v : {cfg->auto_calibration, cfg->contact_ik, cfg->window_mode})
