@@ -1,6 +1,8 @@
 // QuestSim controller: height scaling, latency of the future frames, bad tracker input, recovery
 // from simulation failure and falls, never a NaN out.
 #include <cmath>
+#include <limits>
+#include <stdexcept>
 
 #include "questsim/common.hpp"
 
@@ -222,6 +224,20 @@ TEST_CASE("QuestSim: 20 s of random-weight control on a moving user, float and d
   run(cf);
   CtlD cd(questsim_test::policy_weights<CtlD>(), 1.62);
   run(cd);
+}
+
+TEST_CASE("QuestSim: a negative or non-finite joint armature or damping is refused when the avatar is built") {
+  for (double bad : {-0.01, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    CAPTURE(bad);
+    QuestSimConfig a, d;
+    a.joint_armature = bad;
+    d.joint_damping = bad;
+    CHECK_THROWS_AS(Ctl(questsim_test::policy_weights<Ctl>(), 1.62, a), std::invalid_argument);
+    CHECK_THROWS_AS(Ctl(questsim_test::policy_weights<Ctl>(), 1.62, d), std::invalid_argument);
+  }
+  QuestSimConfig zero;
+  zero.joint_armature = 0;  // allowed: the paper's body without rotor inertia
+  CHECK_NOTHROW(Ctl(questsim_test::policy_weights<Ctl>(), 1.62, zero));
 }
 
 TEST_CASE("QuestSim torque limits: per joint by default, scaled with the avatar; the paper's 200 N m on request") {

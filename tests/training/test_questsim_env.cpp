@@ -185,13 +185,8 @@ TEST_CASE("QuestSim env: neutral starts put the character where the pipeline res
   Env env(clips(), meta(), std::vector<double>(4, 1.75), 3, cfg);
   for (int i = 0; i < env.size(); ++i) {
     const auto& m = env.model(i);
-    control::QuestSimSensorFrame<float> f;
-    for (int d = 0; d < 3; ++d) {
-      f[d].position = env.sensor(i)[d].position.cast<float>();
-      f[d].rotation = env.sensor(i)[d].rotation.cast<float>();
-    }
     auto q = m.neutral_configuration();
-    control::questsim_stand_under_headset(f, q);
+    control::questsim_stand_under_headset(control::cast_sensor_frame<float>(env.sensor(i)), q);
     CHECK((env.simulator(i).q() - q).cwiseAbs().maxCoeff() == 0.f);
     CHECK(env.simulator(i).v().cwiseAbs().maxCoeff() == 0.f);
     CHECK(std::hypot(double(q(0)) - env.sensor(i)[0].position.x(), double(q(2)) - env.sensor(i)[0].position.z()) < 1e-6);

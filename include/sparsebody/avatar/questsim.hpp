@@ -281,11 +281,7 @@ class QuestSimPipeline {
   static Model scaled_avatar(double h, const QuestSimConfig& cfg, character::AvatarOptions o) {
     if (!(std::isfinite(h) && h > 0)) throw std::invalid_argument("QuestSimPipeline: user height must be > 0");
     Model m = character::avatar_for_user_height<S, MB, MD>(h, o);
-    for (int i = 1; i < m.nb; ++i) {
-      m.bodies[i].damping = S(cfg.joint_damping);
-      m.bodies[i].armature = S(cfg.joint_armature);
-    }
-    m.finalize();
+    control::set_questsim_joints(m, cfg.joint_damping, cfg.joint_armature);
     return m;
   }
 

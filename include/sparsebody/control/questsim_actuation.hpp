@@ -10,6 +10,8 @@
 // Limits are for the default 1.75 m, 63 kg avatar and scale with mass x height (gravity torques
 // scale so). `uniform` > 0 restores the paper's mapping (the same limit on every DoF).
 #pragma once
+#include <cmath>
+#include <stdexcept>
 #include <string_view>
 
 #include "sparsebody/dynamics/model.hpp"
@@ -45,6 +47,20 @@ inline typename dynamics::Model<S, MB, MD>::VecV questsim_torque_limits(const dy
     for (int d = 0; d < m.nv_of(i); ++d) lim(b.v_index + d) = S(l);
   }
   return lim;
+}
+
+// The QuestSim joints' passive properties on every non-root body of `m` (the pipeline's avatar and
+// the training environment's: one place, so a trained policy meets the same body at run time).
+// Throws std::invalid_argument for a negative or non-finite damping or armature.
+template <class S, int MB, int MD>
+inline void set_questsim_joints(dynamics::Model<S, MB, MD>& m, double damping, double armature) {
+  if (!(std::isfinite(damping) && damping >= 0) || !(std::isfinite(armature) && armature >= 0))
+    throw std::invalid_argument("QuestSim joints: damping and armature must be finite and >= 0");
+  for (int i = 1; i < m.nb; ++i) {
+    m.bodies[i].damping = S(damping);
+    m.bodies[i].armature = S(armature);
+  }
+  m.finalize();
 }
 
 }  // namespace sparsebody::control

@@ -89,6 +89,17 @@ struct QuestSimDevicePose {
 template <class S>
 using QuestSimSensorFrame = std::array<QuestSimDevicePose<S>, 3>;  // 0 headset, 1 left, 2 right
 
+// The same frame in another scalar type (clips are stored in double, the simulation runs in float).
+template <class S, class T>
+inline QuestSimSensorFrame<S> cast_sensor_frame(const QuestSimSensorFrame<T>& f) noexcept {
+  QuestSimSensorFrame<S> out;
+  for (int d = 0; d < 3; ++d) {
+    out[d].position = f[d].position.template cast<S>();
+    out[d].rotation = f[d].rotation.template cast<S>();
+  }
+  return out;
+}
+
 // Floor heading frame S of a root pose: origin o_S = (p_x, 0, p_z), rotation R_S = R_y(theta).
 template <class S>
 struct QuestSimFloorFrame {

@@ -210,6 +210,7 @@ class QuestSimEnv {
     Retarget retarget;
     Data ref, scratch;
     VecQ q_ref, q_next, q_after;
+    VecQ q_neutral;  // the model's neutral configuration (neutral starts)
     VecV v_ref, v_after, tau, zero_v, tau_max, err, qdd, tau_exp;
     typename Builder::UserWindow window{};
     std::mt19937_64 rng;
@@ -225,7 +226,7 @@ class QuestSimEnv {
         : model(make_model(h, cfg)), sim(model), builder(model), retarget(Retarget::from_meta(model, meta)), ref(model), scratch(model),
           rng(seed * 0x9E3779B97F4A7C15ull + index + 1), height(S(h)) {
       sim.options.mode = dynamics::ControlMode::Torque;
-      q_ref = q_next = model.neutral_configuration();
+      q_ref = q_next = q_neutral = model.neutral_configuration();
       q_after = q_ref;
       v_ref = v_after = tau = zero_v = err = qdd = tau_exp = VecV::Zero(model.nv);
       standing_root_y = q_ref(1);
@@ -236,8 +237,7 @@ class QuestSimEnv {
     }
     static Model make_model(double h, const QuestSimEnvConfig& cfg) {
       Model m = character::avatar_for_user_height<S, MB, MD>(h);
-      for (int i = 1; i < m.nb; ++i) { m.bodies[i].damping = S(cfg.joint_damping); m.bodies[i].armature = S(cfg.joint_armature); }
-      m.finalize();
+      control::set_questsim_joints(m, cfg.joint_damping, cfg.joint_armature);
       return m;
     }
   };
@@ -282,14 +282,8 @@ class QuestSimEnv {
     }
     std::uniform_real_distribution<double> u01(0.0, 1.0);
     if (cfg_.neutral_start > 0 && u01(k.rng) < cfg_.neutral_start) {
-      const auto& s = (*clips_)[k.clip].sensor[k.t];
-      control::QuestSimSensorFrame<S> f;
-      for (int d = 0; d < 3; ++d) {
-        f[d].position = s[d].position.template cast<S>();
-        f[d].rotation = s[d].rotation.template cast<S>();
-      }
-      k.q_after = k.model.neutral_configuration();
-      control::questsim_stand_under_headset(f, k.q_after);
+      k.q_after = k.q_neutral;
+      control::questsim_stand_under_headset(control::cast_sensor_frame<S>((*clips_)[k.clip].sensor[k.t]), k.q_after);
       k.sim.set_state(k.q_after, k.zero_v);
     } else {
       k.sim.set_state(k.q_ref, k.v_ref);
@@ -311,13 +305,13 @@ class QuestSimEnv {
     // q_target (-) q in the velocity layout; the target is frame t+1 (a one-frame lead: what the
     // expert did first, measured better without the feedforward) or frame t.
     Retarget::velocity(k.model, k.sim.q(), cfg_.expert_lead ? k.q_next : k.q_ref, S(1), k.err);
-    k.qdd = wn * wn * k.err + S(2) * wn * (k.v_ref - k.sim.v());
     if (cfg_.expert_pd_kp != 0) {  // no model: tau = tau_max (kp (q_target (-) q) + kd (v_ref - v))
       k.tau_exp = k.tau_max.cwiseProduct(S(cfg_.expert_pd_kp) * k.err + S(cfg_.expert_pd_kd) * (k.v_ref - k.sim.v()));
       k.root_need = k.root_left = 0;
       write_expert_actions(i, k);
       return;
     }
+    k.qdd = wn * wn * k.err + S(2) * wn * (k.v_ref - k.sim.v());
     if (cfg_.expert_feedforward) {  // + a_ref = (v_ref,t+1 - v_ref,t) / dt (frames t+1, t+2 of the clip)
       const S dt = S(1.0 / cfg_.control_rate);
       k.retarget.to_q(k.model, (*clips_)[k.clip].pose[k.t + 2], k.q_after);
@@ -423,13 +417,7 @@ class QuestSimEnv {
   void write_observation(int i, float* out) noexcept {
     Character& k = *chars_[i];
     const QuestSimReference& r = (*clips_)[k.clip];
-    for (int j = 0; j <= NF; ++j) {
-      const auto& s = r.sensor[k.t + j];
-      for (int d = 0; d < 3; ++d) {
-        k.window[j][d].position = s[d].position.template cast<S>();
-        k.window[j][d].rotation = s[d].rotation.template cast<S>();
-      }
-    }
+    for (int j = 0; j <= NF; ++j) k.window[j] = control::cast_sensor_frame<S>(r.sensor[k.t + j]);
     k.builder.build(k.sim, k.window, k.height, out);
     for (int j = 0; j < kObservationSize; ++j)
       if (!std::isfinite(out[j])) out[j] = 0.f;
