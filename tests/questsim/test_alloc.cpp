@@ -1,6 +1,7 @@
 // A QuestSim control tick (sanitiser, window, observation, policy, 2 substeps, fall check, resets)
 // never allocates: counted with a replaced global operator new.
 #include "questsim/common.hpp"
+#include "sparsebody/avatar/questsim_session.hpp"
 #include "support/alloc_counter.hpp"
 
 using namespace sparsebody;
@@ -39,4 +40,33 @@ TEST_CASE("QuestSim control ticks do not allocate (float and double simulation, 
   check_no_alloc<QuestSimDouble>();
   check_no_alloc<QuestSimF16>();
   check_no_alloc<QuestSimQ8>();
+}
+
+// The session front end: ticks, the automatic calibration resizing the avatar (a walk, then a
+// stand of a 1.60 m user: the provisional estimate and its refinement), explicit calls.
+TEST_CASE("QuestSim session: push, resizes and the calibration calls do not allocate") {
+  QuestSimSessionDefault s(QuestSimSessionDefault::load(questsim_test::policy_path()));
+  auto frame = [](double t, bool moving) {
+    trackers::TrackerFrame f = user_frame(t, 1.60);
+    if (!moving) {  // hold the head and hands still (a stand)
+      f = user_frame(0, 1.60);
+      f.time = t;
+    }
+    return f;
+  };
+  for (int k = 0; k < 20; ++k) s.push(frame(k / 72.0, true));  // warm up
+  long long n = 0;
+  {
+    sparsebody_test::AllocationCounter counter;
+    for (int k = 20; k < 20 + 3 * 72; ++k) s.push(frame(k / 72.0, k < 72));
+    s.recalibrate();
+    s.calibrate(frame(3.2, false));
+    s.set_user_scale(1.1);
+    for (int k = 0; k < 36; ++k) s.push(frame(3.3 + k / 72.0, true));
+    s.reset();
+    n = counter.count();
+  }
+  MESSAGE("resizes " << s.resizes() << ", stature " << s.calibration_report().stature);
+  CHECK(s.resizes() >= 3);
+  CHECK(n == 0);
 }

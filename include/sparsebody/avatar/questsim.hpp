@@ -18,13 +18,13 @@
 // Avatar scale (§3.6): the avatar is character::avatar_for_user_height(h) (lengths x h/1.75, masses x
 // (h/1.75)^3, inertias x (h/1.75)^5), h the user's height estimated by user_height_from_headset() from a
 // frame where the user stands upright: h = headset height / eye_height_ratio (0.936: eye height over
-// stature, Drillis & Contini 1966). The same h is the observation's o_user,scale. The height is fixed
-// for the controller's lifetime (building a model allocates); make a new controller for a new user.
-// So QuestSim has no calibration inside push(), unlike the kinematic pipelines: it has no offsets to
-// calibrate (the policy observes the devices' own frames, as its training did), and the one user
-// parameter, h, can only change by building a new avatar. For a session without a standing frame
-// at hand, run features::AutoCalibration on the stream and build the controller from its report
-// (from_calibration_report: h = the stature it found).
+// stature, Drillis & Contini 1966). The same h is the observation's o_user,scale. set_user_height(h)
+// rescales the avatar in place (no allocation) and stands it again under the headset.
+// This class has no calibration inside push(): it has no offsets to calibrate (the policy observes
+// the devices' own frames, as its training did), and the one user parameter is h. The session
+// front end (avatar/questsim_session.hpp) adds what the other pipelines have: the automatic
+// calibration of the stature from standing windows, recalibrate(), and the output as a pose on
+// the avatar's skeleton; the demo and the C API run it. Here: give h (or from_calibration_report).
 // Joint "friction of 0.1" (Appendix A) is a passive viscous damping of 0.1 N m s/rad on every joint,
 // integrated implicitly by the simulator. Floor friction is the simulator's default mu = 1.0.
 //
@@ -128,21 +128,34 @@ class QuestSimPipeline {
 
   // A custom model (already at the user's scale; its joint damping and armature are used as given).
   QuestSimPipeline(std::shared_ptr<const Weights> weights, const Model& model, double user_height, QuestSimConfig cfg)
-      : cfg_(cfg), height_(S(user_height)), sim_(std::make_unique<Sim>(model)), obs_builder_(model),
+      : cfg_(cfg), height_(S(user_height)), base_height_(user_height), sim_(std::make_unique<Sim>(model)),
+        base_model_(std::make_unique<Model>(model)), scaled_model_(std::make_unique<Model>(model)), obs_builder_(model),
         policy_(std::move(weights)), stream_(cfg.control_rate, cfg.sanitizer, cfg.max_gap) {
     if (!(cfg.substeps >= 1) || !(cfg.control_rate > 0))
       throw std::invalid_argument("QuestSimPipeline: substeps >= 1 and control_rate > 0 required");
+    if (!(std::isfinite(user_height) && user_height > 0)) throw std::invalid_argument("QuestSimPipeline: user height must be > 0");
     sim_->options.mode = dynamics::ControlMode::Torque;
     h_ = S(1.0 / (cfg.control_rate * cfg.substeps));
-    standing_q_ = model.neutral_configuration();
-    fall_ = control::FallDetector<S>(fall_detector_config(cfg, standing_q_(1)));
     zero_v_ = Sim::VecV::Zero(model.nv);
     tau_ = zero_v_;
-    tau_max_ = control::questsim_torque_limits(model, user_height / character::AvatarOptions{}.height,
-                                               cfg.per_joint_torque_limits ? 0.0 : cfg.torque_scale);
-    sim_->torques().setZero();
+    size_to(model, user_height);
     obs_.fill(0.f);
     action_.fill(0.f);
+  }
+
+  // Another user (or a better estimate of this one): the avatar is rescaled to `user_height` (m) in
+  // place (character::scale_model_into from the constructed model: lengths, masses, inertias and
+  // torque limits as the constructor would make them) and the character stands again under the
+  // next frame's headset, as after reset() (the input stream and the counters carry on). No
+  // allocation. False (nothing changed) for a height outside [cfg.min_height, cfg.max_height] or
+  // not finite.
+  bool set_user_height(double user_height) noexcept {
+    if (!(user_height >= cfg_.min_height && user_height <= cfg_.max_height)) return false;
+    if (!character::scale_model_into(*base_model_, S(user_height / base_height_), *scaled_model_)) return false;
+    if (!sim_->set_model_parameters(*scaled_model_)) return false;
+    size_to(*scaled_model_, user_height);
+    started_ = false;
+    return true;
   }
 
   // Control period and the latency of the future frames (NF control periods).
@@ -155,6 +168,18 @@ class QuestSimPipeline {
   int push(const trackers::TrackerFrame& f) noexcept {
     return stream_.push(f, [this](const trackers::TrackerFrame& t, bool reset) { tick(t, reset); });
   }
+
+  // The same, calling after(tick, restart) after each tick (the session front end: calibration and
+  // the output pose on the ticks this one runs).
+  template <class After>
+  int push(const trackers::TrackerFrame& f, After&& after) noexcept {
+    return stream_.push(f, [this, &after](const trackers::TrackerFrame& t, bool reset) {
+      tick(t, reset);
+      after(t, reset);
+    });
+  }
+  // The resampler and sanitizer (last_sanitized(): the last tick's devices).
+  const trackers::TrackerStream& tracker_stream() const noexcept { return stream_; }
 
   // Back to the constructed state: no input seen, the next frame stands the character under the
   // headset (the counters of falls, resets and failures are kept: they describe the session).
@@ -285,10 +310,23 @@ class QuestSimPipeline {
     return m;
   }
 
+  // The avatar's user-size-dependent parts: standing pose, fall threshold, torque limits.
+  void size_to(const Model& m, double user_height) noexcept {
+    height_ = S(user_height);
+    standing_q_ = m.neutral_configuration();
+    fall_ = control::FallDetector<S>(fall_detector_config(cfg_, standing_q_(1)));
+    tau_max_ = control::questsim_torque_limits(m, user_height / character::AvatarOptions{}.height,
+                                               cfg_.per_joint_torque_limits ? 0.0 : cfg_.torque_scale);
+    tau_.setZero();
+    sim_->torques().setZero();
+  }
+
   QuestSimConfig cfg_;
   S height_;
+  double base_height_;  // the user height of the constructed model (set_user_height scales from it)
   S h_ = S(1.0 / 72);
   std::unique_ptr<Sim> sim_;
+  std::unique_ptr<Model> base_model_, scaled_model_;  // the constructed avatar; set_user_height's scaling of it
   Builder obs_builder_;
   nn::Network<Net> policy_;
   trackers::TrackerStream stream_;  // the pipelines' shared front end: resampler + sanitizer

@@ -236,19 +236,29 @@ inline dynamics::Model<S, MB, MD> default_avatar(const AvatarOptions& o = Avatar
 // QuestSim-style scaling (Winkler et al. 2022, sec. 3.6 / 5.4): every length (joint offsets,
 // centres of mass, collision geometry) scales by `factor`; mass by factor^mass_exponent
 // (3 = constant density, the default; 1 = mass proportional to height) and rotational inertia by
-// factor^(mass_exponent + 2).
+// factor^(mass_exponent + 2). scale_model_into is the same in place: `out` (which must have in's
+// tree, e.g. an earlier scaling of it) takes only the numbers, so it never allocates (a pipeline
+// resizing its avatar for a new user at run time). False when the trees differ.
 template <class S, int MB, int MD>
-inline dynamics::Model<S, MB, MD> scale_model(const dynamics::Model<S, MB, MD>& in, S factor, S mass_exponent = S(3)) {
-  dynamics::Model<S, MB, MD> m = in;
+inline bool scale_model_into(const dynamics::Model<S, MB, MD>& in, S factor, dynamics::Model<S, MB, MD>& out,
+                             S mass_exponent = S(3)) noexcept {
+  if (!out.assign_parameters(in)) return false;
   const S km = std::pow(factor, mass_exponent);
-  for (int i = 0; i < m.nb; ++i) {
-    auto& b = m.bodies[i];
+  for (int i = 0; i < out.nb; ++i) {
+    auto& b = out.bodies[i];
     b.pos *= factor; b.com *= factor; b.mass *= km; b.inertia *= km * factor * factor;
     for (int k = 0; k < b.num_shapes; ++k) {
       b.shapes[k].pos *= factor; b.shapes[k].pos2 *= factor; b.shapes[k].half *= factor; b.shapes[k].radius *= factor;
     }
   }
-  m.finalize();
+  out.finalize();
+  return true;
+}
+
+template <class S, int MB, int MD>
+inline dynamics::Model<S, MB, MD> scale_model(const dynamics::Model<S, MB, MD>& in, S factor, S mass_exponent = S(3)) {
+  dynamics::Model<S, MB, MD> m = in;
+  scale_model_into(in, factor, m, mass_exponent);
   return m;
 }
 

@@ -142,6 +142,25 @@ struct Model {
     return q;
   }
 
+  // True when `o` has this model's tree: the same bodies, parents and joint types (names aside).
+  bool same_topology(const Model& o) const noexcept {
+    if (o.nb != nb || o.nq != nq || o.nv != nv) return false;
+    for (int i = 0; i < nb; ++i)
+      if (o.bodies[i].parent != bodies[i].parent || o.bodies[i].joint != bodies[i].joint) return false;
+    return true;
+  }
+  // Takes the numbers of a model with the same tree (e.g. the same avatar scaled to another user:
+  // character::scale_model_into): bodies, gravity, contact points. The names are kept, so this
+  // never allocates. False (unchanged) when the trees differ.
+  bool assign_parameters(const Model& o) noexcept {
+    if (!same_topology(o)) return false;
+    bodies = o.bodies;
+    gravity = o.gravity;
+    points = o.points;
+    num_points = o.num_points;
+    return true;
+  }
+
   // Same model in another scalar type (e.g. a float simulation built from a double description).
   template <class T>
   Model<T, MaxBodies, MaxDofs> cast() const {

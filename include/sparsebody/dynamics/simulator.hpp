@@ -102,6 +102,16 @@ class Simulator {
     current_ = 0;
     refresh_kinematics();
   }
+  // The numbers of a model with the same tree (a rescaled avatar: another user's height; masses,
+  // inertias, geometry, gains, limits): the state goes to the new model's reference configuration
+  // at rest, as a new simulator would start (call set_state after). No allocation. False
+  // (nothing changed) when the tree differs (Model::same_topology).
+  bool set_model_parameters(const ModelT& m) noexcept {
+    if (!m_.assign_parameters(m)) return false;
+    env.ground_normal = -m_.gravity.normalized();
+    set_state(m_.neutral_configuration(), VecV::Zero(m_.nv));
+    return true;
+  }
   // PD targets in the configuration layout (quaternions for spherical joints, angles for revolute).
   // The free root's entries are the root servo's target (velocities in the target's body frame).
   VecQ& targets() { return q_target_; }
