@@ -11,8 +11,8 @@ const char* Options::default_storage() noexcept { return "auto"; }
 
 void usage(const char* msg) {
   std::fprintf(stderr,
-               "%s\nusage: sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p] [--no-pelvis]\n"
-               "                       [--weights FILE (LoBSTr) | DIR (Neural3Points: n3p_{signal,lower,upper}.json)]\n"
+               "%s\nusage: sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p|questsim]\n"
+               "                       [--no-pelvis] [--weights FILE (LoBSTr, QuestSim) | DIR (Neural3Points: n3p_{signal,lower,upper}.json)]\n"
                "                       [--mode streaming|window] [--no-contact-ik] [--trackers-out trackers.csv]\n"
                "                       [--calibration-frame N] [--devices [--device-seed S] [--devices-stand T]]\n"
                "                       [--storage auto|float|f16|q8]\n"
@@ -38,7 +38,8 @@ Options parse_options(int argc, char** argv) {
       if (m == "auto") o.model = Model::Auto;
       else if (m == "lobstr") o.model = Model::LoBSTr;
       else if (m == "n3p" || m == "neural3points") o.model = Model::N3P;
-      else usage("--model must be auto, lobstr or n3p");
+      else if (m == "questsim") o.model = Model::QuestSim;
+      else usage("--model must be auto, lobstr, n3p or questsim");
     } else if (a == "--no-pelvis") o.no_pelvis = true;
     else if (a == "--physics") o.physics = true;
     else if (a == "--storage") {

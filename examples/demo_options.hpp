@@ -6,7 +6,7 @@
 
 namespace demo {
 
-enum class Model { Auto, LoBSTr, N3P };
+enum class Model { Auto, LoBSTr, N3P, QuestSim };
 
 struct Options {
   std::string input, output = "avatar.bvh", weights, trackers_out;

@@ -134,7 +134,7 @@ std::optional<Metrics> stream(const Options& o, Input& in, Pipeline& pipe, Shown
   }
   writer.set_offset_scale(100.0 * pipe.user_scale());  // the skeleton at the size the run ended with
   writer.write(o.output);
-  std::printf("wrote   %s: %ld frames at %.0f fps (standard skeleton at the user's size, centimetres)\n", o.output.c_str(), steps,
+  std::printf("wrote   %s: %ld frames at %.0f fps (the output skeleton at the user's size, centimetres)\n", o.output.c_str(), steps,
               fps);
   std::printf("speed   %.1f us per model step (whole pipeline, this run, including resampling)\n",
               1e6 * step_seconds / std::max(1L, steps));

@@ -1,6 +1,6 @@
 // sparsebody_demo: runs a sparsebody pipeline on a mocap clip or a recorded tracker stream.
 //
-//   sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p] [--no-pelvis]
+//   sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p|questsim] [--no-pelvis]
 //                   [--weights FILE|DIR] [--mode streaming|window] [--no-contact-ik]
 //                   [--trackers-out trackers.csv] [--calibration-frame N] [--devices [--device-seed S]]
 //                   [--storage auto|float|f16|q8] [--physics] [--html page.html [--three-js PATH]] [--quiet]
@@ -13,6 +13,11 @@
 // servos, the default model-based controller with its bounded residual wrench; avatar/n3p_physics.hpp).
 // Its output is 0.1 s behind the input; the metrics compare it with the frame it reproduces, and the
 // residual wrench and falls are printed at the end.
+// --model questsim runs QuestSim (avatar/questsim_session.hpp): the torque policy
+// (examples/weights/questsim_policy.json, trained on this machine's CPU and weak: README) drives a
+// simulated avatar sized to the stature the automatic calibration finds, 0.17 s behind the input;
+// a BVH clip is then synthesised as devices record it (--devices: the policy was trained on device
+// poses). Falls, failed steps and resizes are printed at the end.
 // --storage picks how the network weights are held: float, f16 (half the bytes) or q8 (int8, a
 // quarter). The default, auto, takes the build's fastest (nn/storage.hpp fastest_storage: q8 where
 // the target has an int8 kernel - AVX2, AVX-VNNI, AVX-512 VNNI, NEON - and prints the choice and
@@ -56,6 +61,7 @@
 #include "sparsebody/avatar/lobstr_pipeline.hpp"
 #include "sparsebody/avatar/n3p_direct.hpp"
 #include "sparsebody/avatar/n3p_physics.hpp"
+#include "sparsebody/avatar/questsim_session.hpp"
 
 using namespace sparsebody;
 using namespace demo;
@@ -140,17 +146,55 @@ int run_n3p_physics(const Options& o, Input& in) {
   return 0;
 }
 
+// QuestSim (avatar/questsim_session.hpp): the torque policy on a simulated avatar sized to the user's
+// stature (automatic calibration), headset and controllers as the devices record them.
+template <class Session>  // QuestSimSessionDefault / F16 / Q8
+int run_questsim(const Options& o, Input& in) {
+  if (o.mode != avatar::RunMode::Streaming) std::printf("note    --mode window is LoBSTr-only; QuestSim always streams\n");
+  const auto w = Session::load(o.weights);
+  Session pipe(w);
+  auto set_scale = [&](double s) { pipe.set_user_scale(s); };
+  if (!fit_user(o, in, pipe, set_scale)) return 1;
+  const auto& model = pipe.pipeline().simulator().model();
+  std::printf("model   QuestSim %s: torque policy MLP 400/300/200, %s weights, simulated avatar %d bodies / %d DoF,\n"
+              "        %.0f Hz control, 2 substeps, no residual force, output %.2f s behind the input\n",
+              o.weights.c_str(), o.storage.c_str(), model.nb, model.nv, pipe.meta().frame_rate, pipe.delay_seconds());
+  print_credit(w->info().credit);
+  in.model = "QuestSim torque policy, " + o.storage + " weights, simulated avatar, output " +
+             std::to_string(static_cast<int>(std::lround(1000 * pipe.delay_seconds()))) + " ms behind the input";
+  const double t0 = in.frames.front().time;  // the output is delayed: the time it shows, not the last tick's
+  const auto m = stream(o, in, pipe, [&] { return pipe.output_time() - t0; });
+  const auto& q = pipe.pipeline();
+  std::printf("physics QuestSim: %lld falls and %lld failed steps reset the character, %lld tracker resets, %lld avatar resizes"
+              " (calibration); no residual force\n",
+              q.falls(), q.simulation_failures(), q.tracker_resets(), pipe.resizes());
+  if (m) m->print();
+  return 0;
+}
+
+int run_questsim_weights(Options& o, Input& in) {
+  if (o.weights.empty()) o.weights = SPARSEBODY_DEFAULT_QUESTSIM_WEIGHTS;
+  if (o.storage == "f16") return run_questsim<avatar::QuestSimSessionF16>(o, in);
+  if (o.storage == "q8") return run_questsim<avatar::QuestSimSessionQ8>(o, in);
+  return run_questsim<avatar::QuestSimSessionDefault>(o, in);
+}
+
 // --- model choice and dispatch on the weights ---------------------------------------------------
 
 // --model auto: LoBSTr when the input has a pelvis tracker, Neural3Points otherwise (and for
 // --physics). Prints the choice and why; nothing (after the error) when the input cannot drive it.
 std::optional<Model> choose_model(const Options& o, const Input& in) {
+  if (o.model == Model::QuestSim) {
+    std::printf("choice  QuestSim: --model questsim (torque policy on a simulated avatar; headset and controllers)\n");
+    return o.model;
+  }
   if (o.physics && o.model == Model::LoBSTr) {
     std::fprintf(stderr, "error: --physics is Neural3Points' normal mode (use --model n3p or auto)\n");
     return std::nullopt;
   }
   if (o.physics && o.model == Model::Auto) {
-    std::printf("choice  Neural3Points: --physics asks for its normal (simulated) mode\n");
+    std::printf("choice  Neural3Points: --physics asks for its normal (simulated) mode, which tracks closer than QuestSim's\n"
+                "        CPU-trained policy (validation: MPJPE 26.5 vs 36.3 cm; README); --model questsim runs that\n");
     return Model::N3P;
   }
   if (o.model == Model::Auto) {
@@ -204,11 +248,20 @@ int run_lobstr_weights(Options& o, Input& in) {
   return 1;
 }
 
+bool is_csv(const std::string& path) {
+  return path.size() >= 4 && (path.compare(path.size() - 4, 4, ".csv") == 0 || path.compare(path.size() - 4, 4, ".CSV") == 0);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   Options o = parse_options(argc, argv);
   if (!o.html.empty() && (o.three_js = find_three_js(o.three_js)).empty()) return 2;  // before the run, not after it
+  if (o.model == Model::QuestSim && !o.devices && !is_csv(o.input)) {
+    // its policy observes the devices' own poses (trained on them), not trackers at the joints
+    o.devices = true;
+    std::printf("note    QuestSim: the clip's trackers are synthesised as devices record them (--devices)\n");
+  }
   try {
     Input in;
     read_input(o, in);
@@ -219,6 +272,7 @@ int main(int argc, char** argv) {
     }
     const std::optional<Model> model = choose_model(o, in);
     if (!model) return 1;
+    if (*model == Model::QuestSim) return run_questsim_weights(o, in);
     return *model == Model::N3P ? run_neural3points(o, in) : run_lobstr_weights(o, in);
   } catch (const LoadError& e) {  // a weights or input file that is missing or malformed
     std::fprintf(stderr, "error: %s\n", e.what());
