@@ -32,8 +32,7 @@ find tests examples -name '*.csv' -size -200k -exec cp {} $C/tracker_csv/ \; 2>/
 printf 'time,head_px\n' > $C/tracker_csv/short.csv
 head -c 4096 /dev/urandom > $C/pipelines/random0
 head -c 4096 /dev/urandom > $C/capi/random0
-/usr/bin/python3 -m weights_tool.questsim policy --bodies 21 --joint-dofs 48 --future 6 --seed 7 --out $B/questsim_policy.json > /dev/null
-export SPARSEBODY_QUESTSIM_POLICY=$PWD/$B/questsim_policy.json
+# fuzz_pipelines runs the shipped QuestSim policy (SPARSEBODY_QUESTSIM_POLICY=FILE for another one)
 status=0
 # the crash inputs found so far, first (tests/fuzz/regressions/<harness>-<what>)
 for r in tests/fuzz/regressions/*; do

@@ -1,7 +1,7 @@
 // The C# binding (examples/unity/Sparsebody.cs) on Mono: streams a tracker CSV session through the
 // shared library and compares every frame's joint world positions with what the C++ pipelines gave
 // for the same CSV (capi_reference: OUT_DIR/{lobstr,n3p_direct,n3p_physics}.ref). Also the binding's
-// error paths: a missing file, QuestSim, a wrong struct size, use after Dispose.
+// error paths: a missing file, a LoBSTr file as QuestSim, a wrong struct size, use after Dispose.
 //   mono CSharpTest.exe SESSION.csv WEIGHTS_DIR REF_DIR     exit 0: all equal within kTolerance
 using System;
 using System.Collections.Generic;
@@ -97,8 +97,8 @@ static class CSharpTest {
   static void ErrorPaths(string weightsDir) {
     try { Weights.Load(Model.LoBSTr, "/nonexistent.json"); Expect(false, "missing file loaded"); }
     catch (SparsebodyException e) { Expect(e.Status == Status.ErrLoad && e.Message.Contains("/nonexistent.json"), "missing file: " + e.Message); }
-    try { Weights.Load(Model.QuestSim, "x"); Expect(false, "QuestSim loaded"); }
-    catch (SparsebodyException e) { Expect(e.Status == Status.ErrNoTrainedWeights, "QuestSim: " + e.Message); }
+    try { Weights.Load(Model.QuestSim, weightsDir + "/lobstr_compact.weights.json"); Expect(false, "LoBSTr file loaded as QuestSim"); }
+    catch (SparsebodyException e) { Expect(e.Status == Status.ErrLoad && e.Message.Contains("lobstr_compact"), "QuestSim: " + e.Message); }
     using (var w = Weights.Load(Model.N3P, weightsDir + "/n3p")) {
       try { new Pipeline(w, PipelineKind.LoBSTr); Expect(false, "LoBSTr from N3P weights"); }
       catch (SparsebodyException e) { Expect(e.Status == Status.ErrMismatch, "mismatch: " + e.Message); }

@@ -18,6 +18,7 @@
 #include "sparsebody/avatar/lobstr_pipeline.hpp"
 #include "sparsebody/avatar/n3p_direct.hpp"
 #include "sparsebody/avatar/n3p_physics.hpp"
+#include "sparsebody/avatar/questsim_session.hpp"
 #include "sparsebody/c/sparsebody.h"
 #include "support/alloc_counter.hpp"
 
@@ -35,7 +36,9 @@ const std::vector<trackers::TrackerFrame>& session() {
 
 sb_weights* load(int model) {
   sb_weights* w = nullptr;
-  const std::string path = model == SB_MODEL_LOBSTR ? kWeights + "/lobstr_compact.weights.json" : kWeights + "/n3p";
+  const std::string path = model == SB_MODEL_LOBSTR     ? kWeights + "/lobstr_compact.weights.json"
+                           : model == SB_MODEL_QUESTSIM ? kWeights + "/questsim_policy.json"
+                                                        : kWeights + "/n3p";
   REQUIRE(sb_weights_load(model, path.c_str(), &w) == SB_OK);
   REQUIRE(w);
   return w;
@@ -48,12 +51,17 @@ sb_weights* n3p_weights() {
   static sb_weights* w = load(SB_MODEL_N3P);
   return w;
 }
+sb_weights* questsim_weights() {
+  static sb_weights* w = load(SB_MODEL_QUESTSIM);
+  return w;
+}
 
 sb_pipeline* create(int kind) {
   sb_pipeline_config c;
   REQUIRE(sb_pipeline_config_init(&c, kind) == SB_OK);
   sb_pipeline* p = nullptr;
-  REQUIRE(sb_pipeline_create(kind == SB_PIPELINE_LOBSTR ? lobstr_weights() : n3p_weights(), &c, &p) == SB_OK);
+  sb_weights* w = kind == SB_PIPELINE_LOBSTR ? lobstr_weights() : kind == SB_PIPELINE_QUESTSIM ? questsim_weights() : n3p_weights();
+  REQUIRE(sb_pipeline_create(w, &c, &p) == SB_OK);
   REQUIRE(p);
   return p;
 }
@@ -78,7 +86,12 @@ TEST_CASE("weights loading: bad arguments, missing and malformed files, QuestSim
   CHECK(w == nullptr);  // *out cleared on failure
   CHECK(sb_weights_load(42, "x", &w) == SB_ERR_INVALID_ARGUMENT);
   CHECK(mentions(nullptr, "unknown model 42"));
-  CHECK(sb_weights_load(SB_MODEL_QUESTSIM, "x", &w) == SB_ERR_NO_TRAINED_WEIGHTS);
+  CHECK(sb_weights_load(SB_MODEL_QUESTSIM, "/nonexistent/questsim.json", &w) == SB_ERR_LOAD);
+  CHECK(mentions(nullptr, "/nonexistent/questsim.json"));
+  const std::string lobstr_file = kWeights + "/lobstr_compact.weights.json";
+  CHECK(sb_weights_load(SB_MODEL_QUESTSIM, lobstr_file.c_str(), &w) == SB_ERR_LOAD);  // another kind of network
+  CHECK(mentions(nullptr, "lobstr_compact.weights.json"));
+  CHECK(w == nullptr);
   CHECK(sb_weights_load(SB_MODEL_LOBSTR, "/nonexistent/lobstr.json", &w) == SB_ERR_LOAD);
   CHECK(mentions(nullptr, "/nonexistent/lobstr.json"));
   CHECK(w == nullptr);
@@ -171,7 +184,9 @@ TEST_CASE("sb_pipeline_config_init and sb_pipeline_create: every bad argument") 
   bad([](sb_pipeline_config& d) { d.struct_size = 8; }, SB_ERR_STRUCT_SIZE, lobstr_weights());
   bad([](sb_pipeline_config& d) { d.struct_size = sizeof d + 4; }, SB_ERR_STRUCT_SIZE, lobstr_weights());
   bad([](sb_pipeline_config& d) { d.version = 2; }, SB_ERR_STRUCT_SIZE, lobstr_weights());
-  bad([](sb_pipeline_config& d) { d.pipeline = SB_PIPELINE_QUESTSIM; }, SB_ERR_NO_TRAINED_WEIGHTS, lobstr_weights());
+  bad([](sb_pipeline_config& d) { d.pipeline = SB_PIPELINE_QUESTSIM; }, SB_ERR_MISMATCH, lobstr_weights());
+  CHECK(mentions(nullptr, "needs QuestSim weights, got LoBSTr"));
+  bad([](sb_pipeline_config& d) { d.pipeline = SB_PIPELINE_N3P_DIRECT; }, SB_ERR_MISMATCH, questsim_weights());
   bad([](sb_pipeline_config& d) { d.pipeline = 7; }, SB_ERR_INVALID_ARGUMENT, lobstr_weights());
   bad([](sb_pipeline_config& d) { d.contact_ik = 2; }, SB_ERR_INVALID_ARGUMENT, lobstr_weights());
   bad([](sb_pipeline_config& d) { d.pipeline = SB_PIPELINE_N3P_DIRECT; }, SB_ERR_MISMATCH, lobstr_weights());
@@ -213,7 +228,7 @@ TEST_CASE("pipeline handles: NULL, foreign, destroyed, a weights handle, in ever
 }
 
 TEST_CASE("push and read: NULL, struct sizes, NaN, bad flags, order of calls, capacity") {
-  for (int kind : {SB_PIPELINE_LOBSTR, SB_PIPELINE_N3P_DIRECT, SB_PIPELINE_N3P_PHYSICS}) {
+  for (int kind : {SB_PIPELINE_LOBSTR, SB_PIPELINE_N3P_DIRECT, SB_PIPELINE_N3P_PHYSICS, SB_PIPELINE_QUESTSIM}) {
     INFO("pipeline " << kind);
     sb_pipeline* p = create(kind);
     int32_t n = 0;
@@ -474,10 +489,14 @@ TEST_CASE("the C API's output equals the C++ pipelines' bit for bit (same frames
     avatar::N3PPhysicsDefaultSizes<float> cpp(avatar::N3PDirect::load(kWeights + "/n3p"));
     check_parity(cpp, SB_PIPELINE_N3P_PHYSICS);
   }
+  SUBCASE("QuestSim") {
+    avatar::QuestSimSessionDefault cpp(avatar::QuestSimSessionDefault::load(kWeights + "/questsim_policy.json"));
+    check_parity(cpp, SB_PIPELINE_QUESTSIM);
+  }
 }
 
 TEST_CASE("push and read allocate nothing (every pipeline, NaN frames, gaps, errors, calibration)") {
-  for (int kind : {SB_PIPELINE_LOBSTR, SB_PIPELINE_N3P_DIRECT, SB_PIPELINE_N3P_PHYSICS}) {
+  for (int kind : {SB_PIPELINE_LOBSTR, SB_PIPELINE_N3P_DIRECT, SB_PIPELINE_N3P_PHYSICS, SB_PIPELINE_QUESTSIM}) {
     INFO("pipeline " << kind);
     sb_pipeline* p = create(kind);
     int32_t n = 0;
@@ -550,7 +569,7 @@ TEST_CASE("hostile frames: defined statuses, finite poses, no crash") {
   std::mt19937 rng(12345);
   std::uniform_real_distribution<float> u(-1, 1);
   const float specials[] = {kNaN, std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(), 1e30f, -1e30f, 0.0f};
-  for (int kind : {SB_PIPELINE_LOBSTR, SB_PIPELINE_N3P_DIRECT, SB_PIPELINE_N3P_PHYSICS}) {
+  for (int kind : {SB_PIPELINE_LOBSTR, SB_PIPELINE_N3P_DIRECT, SB_PIPELINE_N3P_PHYSICS, SB_PIPELINE_QUESTSIM}) {
     INFO("pipeline " << kind);
     sb_pipeline* p = create(kind);
     int32_t n = 0;

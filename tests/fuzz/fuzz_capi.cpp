@@ -72,9 +72,11 @@ sb_tracker_frame frame(Bytes& b, double& t, int k) {
 struct Weights {
   sb_weights* lobstr = nullptr;
   sb_weights* n3p = nullptr;
+  sb_weights* questsim = nullptr;
   Weights() {
     if (sb_weights_load(SB_MODEL_LOBSTR, SPARSEBODY_SOURCE_DIR "/examples/weights/lobstr_compact.weights.json", &lobstr) != SB_OK ||
-        sb_weights_load(SB_MODEL_N3P, SPARSEBODY_SOURCE_DIR "/examples/weights/n3p", &n3p) != SB_OK) {
+        sb_weights_load(SB_MODEL_N3P, SPARSEBODY_SOURCE_DIR "/examples/weights/n3p", &n3p) != SB_OK ||
+        sb_weights_load(SB_MODEL_QUESTSIM, SPARSEBODY_SOURCE_DIR "/examples/weights/questsim_policy.json", &questsim) != SB_OK) {
       std::fprintf(stderr, "fuzz_capi: cannot load the shipped weights: %s\n", sb_last_error(nullptr));
       std::abort();
     }
@@ -86,7 +88,7 @@ struct Weights {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static Weights W;
   Bytes b{data, size};
-  const int kind = 1 + b.u8() % 4;  // LoBSTr, N3P direct, N3P physics, QuestSim (no weights)
+  const int kind = 1 + b.u8() % 4;  // LoBSTr, N3P direct, N3P physics, QuestSim
   sb_pipeline_config cfg{};
   check(sb_pipeline_config_init(&cfg, kind), nullptr, "config_init");
   const std::uint8_t c = b.u8();
@@ -96,7 +98,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   cfg.contact_ik = (c >> 3) & 1;
   cfg.window_mode = (c >> 4) & 1;
   if (c & 32) cfg.pipeline = 77;
-  const sb_weights* w = (kind == 1) == !(c & 64) ? W.lobstr : W.n3p;  // sometimes the other model's
+  // the pipeline's own weights, or (bit 6) another model's
+  const sb_weights* own = kind == 1 ? W.lobstr : kind == 4 ? W.questsim : W.n3p;
+  const sb_weights* other = kind == 1 ? W.n3p : W.lobstr;
+  const sb_weights* w = (c & 64) ? other : own;
   sb_pipeline* p = nullptr;
   const sb_status created = sb_pipeline_create(w, &cfg, &p);
   check(created, nullptr, "create");

@@ -1,5 +1,5 @@
-// Arbitrary tracker streams through the pipelines (LoBSTr, Neural3Points direct and physics,
-// QuestSim when SPARSEBODY_QUESTSIM_POLICY names a policy file; the first byte picks one). The bytes steer a plausible user
+// Arbitrary tracker streams through the pipelines (LoBSTr, Neural3Points direct and physics, the
+// QuestSim session with the shipped policy or SPARSEBODY_QUESTSIM_POLICY's; the first byte picks one). The bytes steer a plausible user
 // (standing, walking, turning) into NaN, Inf, huge values, non-unit quaternions, time going
 // backwards or standing still, gaps, teleports and validity flapping. Checked: no crash or
 // sanitizer report, and every output a pipeline says it has is finite.
@@ -14,7 +14,7 @@
 #include "sparsebody/avatar/lobstr_pipeline.hpp"
 #include "sparsebody/avatar/n3p_direct.hpp"
 #include "sparsebody/avatar/n3p_physics.hpp"
-#include "sparsebody/avatar/questsim.hpp"
+#include "sparsebody/avatar/questsim_session.hpp"
 
 namespace sb = sparsebody;
 
@@ -82,11 +82,10 @@ struct Pipelines {
   sb::avatar::N3PPipeline<>::Weights n3p_w = sb::avatar::N3PPipeline<>::load(SPARSEBODY_SOURCE_DIR "/examples/weights/n3p");
   sb::avatar::N3PPipeline<> direct{n3p_w};
   sb::avatar::N3PPhysicsPipeline<> physics{n3p_w};
-  std::shared_ptr<const sb::avatar::QuestSimPipeline<>::Weights> questsim_w;
-  std::unique_ptr<sb::avatar::QuestSimPipeline<>> questsim;
-  Pipelines() {
-    if (const char* q = std::getenv("SPARSEBODY_QUESTSIM_POLICY")) questsim_w = sb::avatar::QuestSimPipeline<>::load_weights(q);
-  }
+  // the shipped policy, or SPARSEBODY_QUESTSIM_POLICY's (e.g. random weights: other states)
+  std::shared_ptr<const sb::avatar::QuestSimPipeline<>::Weights> questsim_w = sb::avatar::QuestSimPipeline<>::load_weights(
+      std::getenv("SPARSEBODY_QUESTSIM_POLICY") ? std::getenv("SPARSEBODY_QUESTSIM_POLICY")
+                                                : SPARSEBODY_SOURCE_DIR "/examples/weights/questsim_policy.json");
 };
 
 // One stream through one pipeline, from a reset (the first byte picks the pipeline: coverage of
@@ -105,19 +104,23 @@ void stream(Pipe& pipe, Bytes& b, const char* name) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static Pipelines P;
   Bytes b{data, size};
-  switch (b.u8() % (P.questsim_w ? 4 : 3)) {
+  switch (b.u8() % 4) {
     case 0: P.lobstr.reset(); stream(P.lobstr, b, "lobstr"); break;
     case 1: P.direct.reset(); stream(P.direct, b, "n3p direct"); break;
     case 2: P.physics.reset(); stream(P.physics, b, "n3p physics"); break;
     default: {
-      sb::avatar::QuestSimPipeline<> q(P.questsim_w, 1.72);  // fresh per input
+      // the session (what the demo and the C API run: the pipeline, its calibration and resizes,
+      // the output pose), fresh per input
+      sb::avatar::QuestSimSessionDefault q(P.questsim_w);
       double t = 0;
       for (int k = 0; b.more() && k < 96; ++k) {
         q.push(next_frame(b, t, k));
-        if (!q.simulator().q().allFinite() || !q.simulator().v().allFinite()) {
+        const auto& sim = q.pipeline().simulator();
+        if (!sim.q().allFinite() || !sim.v().allFinite()) {
           std::fprintf(stderr, "questsim: non-finite simulator state\n");
           std::abort();
         }
+        check_output(q, "questsim");
       }
     }
   }

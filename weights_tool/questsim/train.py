@@ -168,6 +168,9 @@ def main(argv=None):
     ap.add_argument("--neutral-start", type=float, default=0.25,
                     help="share of episodes started in the pipeline's reset pose (neutral, at rest, under the headset)")
     ap.add_argument("--max-head-error", type=float, default=0.5, help="m: an episode ends when the head is this far off the reference")
+    ap.add_argument("--heights", type=float, nargs=2, default=[1.45, 1.95], metavar=("LO", "HI"),
+                    help="m: the characters' heights, evenly spaced over [LO, HI] (the clip retargeted to each; "
+                         "o_user,scale): the run-time avatar is sized to each user (1.75 1.75: runs 1-7's single size)")
     ap.add_argument("--threads", type=int, default=1, help="torch threads")
     ap.add_argument("--env-threads", type=int, default=1)
     ap.add_argument("--seed", type=int, default=1)
@@ -187,7 +190,10 @@ def main(argv=None):
     cfg.expert_wn = a.expert_wn
     cfg.expert_support = a.expert_support_height > 0
     cfg.expert_support_height = max(a.expert_support_height, 1e-6)
-    env = qe.Env(clips, [1.75] * a.envs, a.seed, cfg)
+    if not (0.5 < a.heights[0] <= a.heights[1] < 3.0):
+        raise SystemExit(f"--heights {a.heights[0]} {a.heights[1]}: expected 0.5 < LO <= HI < 3 (m)")
+    heights = np.linspace(a.heights[0], a.heights[1], a.envs)
+    env = qe.Env(clips, [float(h) for h in np.random.default_rng(a.seed).permutation(heights)], a.seed, cfg)
     n_obs, n_act = qe.Env.obs_size, qe.Env.action_size
     model = ActorCritic(n_obs, n_act, a.init_std)
     opt = torch.optim.Adam(model.parameters(), lr=a.lr)
@@ -206,7 +212,8 @@ def main(argv=None):
     if not (a.resume and os.path.exists(curve)):
         with open(curve, "w", newline="") as f:
             csv.writer(f).writerow(fields)
-    print(f"{len(paths)} clips ({a.motions}), {a.envs} characters, obs {n_obs}, actions {n_act}", flush=True)
+    print(f"{len(paths)} clips ({a.motions}), {a.envs} characters of {a.heights[0]:.2f}-{a.heights[1]:.2f} m, obs {n_obs}, "
+          f"actions {n_act}", flush=True)
     t_start = time.time()
     N, T = a.envs, a.horizon
     ep_len = np.zeros(N)
@@ -316,7 +323,7 @@ def main(argv=None):
             os.replace(ckpt + ".tmp", ckpt)
             export(os.path.join(a.out, "questsim_policy.json"), model, stats, n_obs, n_act,
                    {"samples": samples, "iterations": it, "motions": a.motions, "clips": len(paths),
-                    "residual_at_export": res_f, "joint_armature": a.armature})
+                    "residual_at_export": res_f, "joint_armature": a.armature, "heights_m": list(a.heights)})
             plot(curve, os.path.join(a.out, "curve.png"))
 
 

@@ -69,6 +69,14 @@ class QuestSimSession {
   int push(const trackers::TrackerFrame& f) noexcept {
     return pipe_.push(f, [this](const trackers::TrackerFrame& tick, bool restart) { after_tick(tick, restart); });
   }
+  // The same, calling after(tick, restart) after each tick (as PipelineFrontEnd::push).
+  template <class After>
+  int push(const trackers::TrackerFrame& f, After&& after) noexcept {
+    return pipe_.push(f, [this, &after](const trackers::TrackerFrame& tick, bool restart) {
+      after_tick(tick, restart);
+      after(tick, restart);
+    });
+  }
 
   // Back to the constructed state (no output, the character stands again at the next frame); the
   // calibration is kept (recalibrate() forgets it), the pipeline's counters too.

@@ -65,7 +65,7 @@ typedef enum sb_status {
   SB_ERR_CAPACITY = -5,       /* the caller's array is smaller than the joint count */
   SB_ERR_ORDER = -6,          /* call out of order (read before the first push) */
   SB_ERR_LOAD = -7,           /* a weights file missing or malformed (message names it) */
-  SB_ERR_NO_TRAINED_WEIGHTS = -8, /* QuestSim: not run through the C API yet */
+  SB_ERR_NO_TRAINED_WEIGHTS = -8, /* no longer returned (QuestSim runs through this API); kept for old callers */
   SB_ERR_UNSUPPORTED = -9,    /* e.g. weights whose network sizes this build does not include */
   SB_ERR_MISMATCH = -10,      /* weights of another model than the pipeline needs */
   SB_ERR_OUT_OF_MEMORY = -11,
@@ -76,14 +76,15 @@ typedef enum sb_status {
 typedef enum sb_model {
   SB_MODEL_LOBSTR = 1,   /* one file, e.g. examples/weights/lobstr_compact.weights.json (H 256, latent 128) */
   SB_MODEL_N3P = 2,      /* Neural3Points: three files PREFIX_upper/_lower/_signal.json */
-  SB_MODEL_QUESTSIM = 3  /* SB_ERR_NO_TRAINED_WEIGHTS */
+  SB_MODEL_QUESTSIM = 3  /* one file, e.g. examples/weights/questsim_policy.json (kind questsim_policy) */
 } sb_model;
 
 typedef enum sb_pipeline_kind {
   SB_PIPELINE_LOBSTR = 1,      /* SB_MODEL_LOBSTR weights; needs the pelvis tracker */
   SB_PIPELINE_N3P_DIRECT = 2,  /* SB_MODEL_N3P weights; headset + controllers */
   SB_PIPELINE_N3P_PHYSICS = 3, /* SB_MODEL_N3P weights; simulated avatar, output 0.1 s behind */
-  SB_PIPELINE_QUESTSIM = 4     /* SB_ERR_NO_TRAINED_WEIGHTS */
+  SB_PIPELINE_QUESTSIM = 4     /* SB_MODEL_QUESTSIM weights; headset + controllers; torque policy on a simulated
+                                  avatar sized by the calibration's stature, output 0.17 s behind; contact_ik unused */
 } sb_pipeline_kind;
 
 /* Tracker indices and the validity bits of sb_tracker_frame.valid. */
@@ -97,7 +98,7 @@ enum { SB_TRACKER_HEAD = 0, SB_TRACKER_LEFT_HAND = 1, SB_TRACKER_RIGHT_HAND = 2,
 #define SB_POSE_OK 1u          /* a pose is available (what sb_pipeline_read copied) */
 #define SB_POSE_CALIBRATING 2u /* not calibrated: the default body (searching, or auto_calibration 0), or refused */
 #define SB_POSE_RESET 4u       /* the model restarted during the last push (tracking gap, origin jump, start) */
-#define SB_POSE_FALLEN 8u      /* physics: the avatar fell during the last push and was reset to the prediction */
+#define SB_POSE_FALLEN 8u      /* physics: the avatar fell during the last push and was reset (N3P: to the prediction; QuestSim: standing under the headset) */
 
 /* sb_calibration_report.state / .source */
 enum { SB_CALIBRATION_DEFAULT = 0, SB_CALIBRATION_CALIBRATED = 1, SB_CALIBRATION_REFUSED = 2 };

@@ -7,8 +7,8 @@
 // cleared tag (not an unmapped page). Every entry point catches everything: no exception crosses.
 // Per frame (push, read, queries): no allocation; messages go into fixed buffers (snprintf).
 // Builds: LoBSTr compact (H 256, latent 128), Neural3Points direct and physics (the paper's sizes),
-// float weights. QuestSim: SB_ERR_NO_TRAINED_WEIGHTS (not run through the C API yet; its weak trained
-// policy, examples/weights/questsim_policy.json, runs in C++ and Python).
+// QuestSim (avatar/questsim_session.hpp: the torque policy on a simulated avatar sized by the automatic
+// calibration), float weights.
 #pragma once
 #include <cmath>
 #include <cstdarg>
@@ -27,6 +27,7 @@
 #include "sparsebody/avatar/lobstr_pipeline.hpp"
 #include "sparsebody/avatar/n3p_direct.hpp"
 #include "sparsebody/avatar/n3p_physics.hpp"
+#include "sparsebody/avatar/questsim_session.hpp"
 #include "sparsebody/c/sparsebody.h"
 #include "sparsebody/core/error.hpp"
 #include "sparsebody/io/weights_json.hpp"
@@ -41,6 +42,7 @@ inline constexpr std::size_t kMessage = 256;
 using LoBSTr = avatar::LoBSTrCompact;
 using N3PDirect = avatar::N3PDirect;
 using N3PPhysics = avatar::N3PPhysicsDefaultSizes<float>;
+using QuestSim = avatar::QuestSimSessionDefault;
 
 inline char* thread_message() noexcept {
   static thread_local char m[kMessage] = "";
@@ -77,9 +79,11 @@ struct PipelineModel final : PipelineBase {
   template <class W, class C>
   PipelineModel(const W& w, const C& c) : p(w, c) {}
 
-  static constexpr bool kPhysics = std::is_same_v<P, N3PPhysics>;
+  static constexpr bool kQuestSim = std::is_same_v<P, QuestSim>;
+  static constexpr bool kPhysics = std::is_same_v<P, N3PPhysics> || kQuestSim;
   const trackers::SanitizedFrame& sanitized() const noexcept {
-    if constexpr (kPhysics) return p.direct().tracker_stream().last_sanitized();
+    if constexpr (std::is_same_v<P, N3PPhysics>) return p.direct().tracker_stream().last_sanitized();
+    else if constexpr (kQuestSim) return p.pipeline().tracker_stream().last_sanitized();
     else return p.tracker_stream().last_sanitized();
   }
 
@@ -116,7 +120,9 @@ struct PipelineModel final : PipelineBase {
   void recalibrate() noexcept override { p.recalibrate(); }
   void set_joint_calibration(double scale) noexcept override {
     // the demo's BVH path: identity offsets (trackers at the joints), only the size
-    if constexpr (std::is_same_v<P, LoBSTr>) {
+    if constexpr (kQuestSim) {
+      p.set_user_scale(scale);  // QuestSim: the avatar's size (a stature outside 1.0-2.4 m is ignored)
+    } else if constexpr (std::is_same_v<P, LoBSTr>) {
       features::Calibration c;
       c.scale = scale;
       p.set_calibration(c);
@@ -139,6 +145,7 @@ struct sb_weights {
   std::int32_t model = 0;
   std::shared_ptr<const sparsebody::capi::LoBSTr::Weights> lobstr;
   sparsebody::capi::N3PDirect::Weights n3p;
+  std::shared_ptr<const sparsebody::capi::QuestSim::Weights> questsim;
   char error[sparsebody::capi::kMessage] = "";
 };
 
@@ -277,9 +284,7 @@ SPARSEBODY_API sb_status sb_weights_load(int32_t model, const char* path, sb_wei
   *out = nullptr;
   if (!path) return c::fail(nullptr, SB_ERR_NULL, "sb_weights_load: path is NULL");
   try {
-    if (model == SB_MODEL_QUESTSIM)
-      return c::fail(nullptr, SB_ERR_NO_TRAINED_WEIGHTS, "sb_weights_load: QuestSim does not run through the C API yet (C++: avatar::QuestSimPipeline)");
-    if (model != SB_MODEL_LOBSTR && model != SB_MODEL_N3P)
+    if (model != SB_MODEL_LOBSTR && model != SB_MODEL_N3P && model != SB_MODEL_QUESTSIM)
       return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_weights_load: unknown model %d", int(model));
     auto w = std::make_unique<sb_weights>();
     w->model = model;
@@ -295,6 +300,8 @@ SPARSEBODY_API sb_status sb_weights_load(int32_t model, const char* path, sb_wei
         return c::fail(nullptr, SB_ERR_UNSUPPORTED, "%s: LoBSTr H=%d latent=%d; this build has H=%d latent=%d only", path, hidden, latent,
                        c::LoBSTr::kHidden, c::LoBSTr::kLatent);
       w->lobstr = c::LoBSTr::load(path);
+    } else if (model == SB_MODEL_QUESTSIM) {
+      w->questsim = c::QuestSim::load(path);  // kind "questsim_policy", the default avatar's sizes
     } else {
       std::string p = path;
       if (c::is_dir(path)) p += "/n3p";
@@ -377,18 +384,17 @@ SPARSEBODY_API sb_status sb_pipeline_create(const sb_weights* w, const sb_pipeli
   if (cfg->version != SB_API_VERSION)
     return c::fail(nullptr, SB_ERR_STRUCT_SIZE, "sb_pipeline_create: cfg version %u, this library is %u", cfg->version, SB_API_VERSION);
   const int kind = cfg->pipeline;
-  if (kind == SB_PIPELINE_QUESTSIM)
-    return c::fail(nullptr, SB_ERR_NO_TRAINED_WEIGHTS, "sb_pipeline_create: QuestSim does not run through the C API yet (C++: avatar::QuestSimPipeline)");
-  if (kind < SB_PIPELINE_LOBSTR || kind > SB_PIPELINE_N3P_PHYSICS)
+  if (kind < SB_PIPELINE_LOBSTR || kind > SB_PIPELINE_QUESTSIM)
     return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_pipeline_create: unknown pipeline %d", kind);
   for (int32_t v : {cfg->auto_calibration, cfg->contact_ik, cfg->window_mode})
     if (v != 0 && v != 1) return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_pipeline_create: a flag of cfg is %d, not 0 or 1", int(v));
   if (cfg->window_mode && kind != SB_PIPELINE_LOBSTR)
     return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_pipeline_create: window_mode is LoBSTr-only");
-  const int need = kind == SB_PIPELINE_LOBSTR ? SB_MODEL_LOBSTR : SB_MODEL_N3P;
+  const int need = kind == SB_PIPELINE_LOBSTR ? SB_MODEL_LOBSTR : kind == SB_PIPELINE_QUESTSIM ? SB_MODEL_QUESTSIM : SB_MODEL_N3P;
+  auto model_name = [](int m) { return m == SB_MODEL_LOBSTR ? "LoBSTr" : m == SB_MODEL_QUESTSIM ? "QuestSim" : "Neural3Points"; };
   if (w->model != need)
-    return c::fail(nullptr, SB_ERR_MISMATCH, "sb_pipeline_create: this pipeline needs %s weights, got %s",
-                   need == SB_MODEL_LOBSTR ? "LoBSTr" : "Neural3Points", w->model == SB_MODEL_LOBSTR ? "LoBSTr" : "Neural3Points");
+    return c::fail(nullptr, SB_ERR_MISMATCH, "sb_pipeline_create: this pipeline needs %s weights, got %s", model_name(need),
+                   model_name(w->model));
   try {
     auto h = std::make_unique<sb_pipeline>();
     h->kind = kind;
@@ -403,6 +409,10 @@ SPARSEBODY_API sb_status sb_pipeline_create(const sb_weights* w, const sb_pipeli
       pc.foot_ik = cfg->contact_ik != 0;
       pc.calibration.enabled = cfg->auto_calibration != 0;
       h->impl = std::make_unique<c::PipelineModel<c::N3PDirect>>(w->n3p, pc);
+    } else if (kind == SB_PIPELINE_QUESTSIM) {
+      a::QuestSimSessionConfig pc;  // contact_ik does not apply (a simulated body)
+      pc.calibration.enabled = cfg->auto_calibration != 0;
+      h->impl = std::make_unique<c::PipelineModel<c::QuestSim>>(w->questsim, pc);
     } else {
       a::N3PPhysicsConfig pc;
       pc.direct.foot_ik = cfg->contact_ik != 0;
