@@ -2,7 +2,7 @@
 pipeline (avatar::QuestSimPipeline via the `sparsebody` Python module) on the device-realistic stream
 a headset session of each clip would record (72 Hz, headset at the eyes, controllers at the grips).
 
-  /usr/bin/python3 -m weights_tool.questsim.evaluate POLICY.json VALDIR [--motions REGEX] [--every N]
+  /usr/bin/python3 -m weights_tool.questsim.evaluate POLICY.json VALDIR [--motions REGEX] [--every N [--offset K]]
       [--json OUT.json] [--plots DIR]
 
 Per clip and in the summary (frames weighted):
@@ -123,13 +123,14 @@ def main(argv=None):
     ap.add_argument("policy")
     ap.add_argument("clips")
     ap.add_argument("--motions", default=DEFAULT_MOTIONS)
-    ap.add_argument("--every", type=int, default=1)
+    ap.add_argument("--every", type=int, default=1, help="every Nth clip (sorted by name)")
+    ap.add_argument("--offset", type=int, default=0, help="starting at clip K: --every 2 --offset 0/1 split the folder in two halves")
     ap.add_argument("--json")
     ap.add_argument("--plots")
     a = ap.parse_args(argv)
     sb = load_sb()
     rx = re.compile(a.motions)
-    paths = [p for p in sorted(glob.glob(os.path.join(a.clips, "*.bvh"))) if rx.search(os.path.basename(p))][::a.every]
+    paths = [p for p in sorted(glob.glob(os.path.join(a.clips, "*.bvh"))) if rx.search(os.path.basename(p))][a.offset::a.every]
     if not paths:
         raise SystemExit(f"error: no clips in {a.clips} match {a.motions!r}")
     rows = []

@@ -61,7 +61,8 @@ class QuestSimSession {
         skeleton_(skeleton_of(character::default_avatar<double, Pipeline::MB, Pipeline::MD>())),
         map_(pose::JointMap::from_names(skeleton_, "QuestSim avatar")),
         // the default stature is the avatar's: standard head height + eye offset = 0.936 x 1.75 m
-        auto_(cfg.devices, kDefaultStature * cfg.calibration.eye_height_ratio - cfg.devices.eye.y(), cfg.calibration) {
+        auto_(cfg.devices, kDefaultStature * cfg.calibration.eye_height_ratio - cfg.devices.eye.y(), cfg.calibration),
+        trial_(std::make_unique<features::AutoCalibration>(auto_)) {
     meta_.frame_rate = cfg.questsim.control_rate;
     out_.resize(skeleton_.size());
   }
@@ -193,7 +194,7 @@ class QuestSimSession {
   pose::Skeleton skeleton_;
   pose::JointMap map_;
   features::AutoCalibration auto_;
-  std::unique_ptr<features::AutoCalibration> trial_ = std::make_unique<features::AutoCalibration>();
+  std::unique_ptr<features::AutoCalibration> trial_;  // calibrate()'s scratch copy
   pose::PoseOutput out_;
   Meta meta_;
   long long frames_ = 0, resizes_ = 0;
