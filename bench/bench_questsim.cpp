@@ -2,7 +2,9 @@
 //   BM_QuestSimControlStep<float/double simulation, float/f16/q8 policy weights>: observation + policy + torques
 //     + 2 substeps + fall check (QuestSimPipeline::control_step), the issue's <= 40 us target;
 //   BM_QuestSimTick: the same from a TrackerFrame (sanitiser + window shift added);
-//   BM_QuestSimObservation, BM_QuestSimPolicy<W>, BM_QuestSimSubstep: the parts.
+//   BM_QuestSimObservation, BM_QuestSimPolicy<W>, BM_QuestSimSubstep: the parts;
+//   BM_QuestSimSession<W>: avatar::QuestSimSession (calibration, output pose) with the shipped trained
+//     policy, per 36 Hz tick: two 72 Hz frames of a user standing and gesturing (falls counted).
 // The policy has random weights made here (PyTorch-default uniform init, output layer x 0.01 like a
 // PPO policy head, foot forces normalised by 618 N): an untrained policy, so the character falls
 // about every 10 steps and is stood up again inside control_step (counted as `falls`), as it would be
@@ -16,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "sparsebody/avatar/questsim.hpp"
+#include "sparsebody/avatar/questsim_session.hpp"
 
 using namespace sparsebody;
 using namespace sparsebody::control;
@@ -163,8 +166,31 @@ void BM_QuestSimSubstep(benchmark::State& st) {
   st.counters["aba_passes"] = double(passes) / double(n);
 }
 
+template <class W>
+void BM_QuestSimSession(benchmark::State& st) {
+  using Session = QuestSimSession<float, W>;
+  static auto w = Session::load(SPARSEBODY_QUESTSIM_SHIPPED_POLICY);
+  Session s(w);
+  int k = 0;
+  for (; k < 144; ++k) s.push(user_frame(k / 72.0));  // calibrated (the user stands), sized
+  const long long f0 = s.falls(), r0 = s.restarts();
+  long long ticks = 0;
+  for (auto _ : st) {
+    ticks += s.push(user_frame(k++ / 72.0));
+    ticks += s.push(user_frame(k++ / 72.0));
+    benchmark::DoNotOptimize(s.world().position.data());
+  }
+  st.counters["ticks"] = benchmark::Counter(double(ticks), benchmark::Counter::kAvgIterations);
+  st.counters["falls"] = double(s.falls() - f0);
+  st.counters["restarts"] = double(s.restarts() - r0);
+  st.counters["stature"] = s.calibration_report().stature;
+}
+
 }  // namespace
 
+BENCHMARK_TEMPLATE(BM_QuestSimSession, float);
+BENCHMARK_TEMPLATE(BM_QuestSimSession, nn::f16);
+BENCHMARK_TEMPLATE(BM_QuestSimSession, nn::q8);
 BENCHMARK_TEMPLATE(BM_QuestSimControlStep, float, float);
 BENCHMARK_TEMPLATE(BM_QuestSimControlStep, float, nn::f16);
 BENCHMARK_TEMPLATE(BM_QuestSimControlStep, float, nn::q8);
