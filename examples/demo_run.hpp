@@ -69,9 +69,9 @@ void print_calibration(const Options& o, const Input& in, const Pipeline& pipe) 
     std::printf("\n");
   } else if (r.status == f::CalibrationStatus::Refused) {
     std::printf("calib   %s (input frames %ld-%ld)\n", r.message, frame_at(in, r.first_time), frame_at(in, r.last_time));
-  } else if (r.sized_from_headset) {  // a lower bound from the headset height, not a calibration
-    std::printf("calib   no standing frame found: default body sized to the headset (stature >= %.2f m, not measured)\n",
-                r.stature);
+  } else if (r.sized_from_headset) {  // from the headset height (a lower bound, or QuestSim's estimate), not a calibration
+    std::printf("calib   no standing frame found: default body sized to the headset (stature %s%.2f m, not measured)\n",
+                r.sized_lower_bound ? ">= " : "~", r.stature);
   } else {
     std::printf("calib   no standing frame found: default body (stature %.2f m)\n", r.stature);
   }

@@ -213,6 +213,7 @@ TEST_CASE("auto calibration: before any stand the default body is no smaller tha
   CHECK(f.cal.calibration().scale == doctest::Approx(kStdHead / (eye0 - 0.08)));
   CHECK(f.r().stature == doctest::Approx(eye0 / 0.936));
   CHECK(std::string(f.r().message).find("no standing frame yet: default body sized to the headset (stature >= ") == 0);
+  CHECK(f.r().sized_lower_bound);
   for (; walk[i].time < 3.0; ++i) f.feed(walk[i]);
   CHECK(f.changes == 1);  // once: walking higher or lower later changes nothing
   for (; i < walk.size(); ++i) f.feed(walk[i]);
@@ -242,6 +243,37 @@ TEST_CASE("auto calibration: before any stand the default body is no smaller tha
   Feeder h(cfg);
   h.feed(sparsebody_test::session({{Phase::Walk, 2.0, 1.80}}));
   CHECK(h.cal.calibration().scale == 1.0);
+}
+
+TEST_CASE("auto calibration: size_from_headset_both_ways also shrinks the default body (QuestSim's avatar)") {
+  for (const bool both : {false, true}) {
+    features::AutoCalibrationConfig cfg;
+    cfg.size_from_headset_both_ways = both;
+    Feeder f(cfg);
+    auto walk = sparsebody_test::session({{Phase::Walk, 2.0, 1.35}});  // eyes at 1.35 m: a ~1.44 m user (default 1.56 m)
+    const float eye0 = walk[0].pose[0].position.y;
+    f.feed(walk);
+    CHECK(f.r().status == features::CalibrationStatus::Default);
+    if (!both) {  // the kinematic pipelines keep the default (the lower bound says nothing)
+      CHECK(f.changes == 0);
+      CHECK_FALSE(f.r().sized_from_headset);
+      CHECK(f.cal.calibration().scale == 1.0);
+      continue;
+    }
+    CHECK(f.changes == 1);
+    CHECK(f.r().sized_from_headset);
+    CHECK_FALSE(f.r().sized_lower_bound);
+    CHECK(f.r().stature == doctest::Approx(eye0 / 0.936));
+    CHECK(f.cal.calibration().scale == doctest::Approx(kStdHead / (eye0 - 0.08)));
+    CHECK(std::string(f.r().message).find("default body sized to the first upright headset frame (stature ~") != std::string::npos);
+  }
+  // below the plausible range (eyes at 1.0 m: 1.07 m): not used
+  features::AutoCalibrationConfig cfg;
+  cfg.size_from_headset_both_ways = true;
+  Feeder g(cfg);
+  g.feed(sparsebody_test::session({{Phase::Walk, 2.0, 1.0}}));
+  CHECK(g.changes == 0);
+  CHECK_FALSE(g.r().sized_from_headset);
 }
 
 TEST_CASE("auto calibration: NaN bursts and a lost headset break a window, no NaN comes out") {

@@ -54,17 +54,20 @@ TEST_CASE("QuestSim set_user_height rescales in place: bit-identical to a contro
   CHECK(rescaled.simulator().q() == q);
 }
 
-TEST_CASE("QuestSim session: the default body until the user stands, then the stature found") {
+TEST_CASE("QuestSim session: sized from the first upright headset frame, then the stature of a stand") {
   QuestSimSessionDefault s(questsim_test::policy_weights<QuestSimDefault>());
   CHECK(s.user_scale() == doctest::Approx(1.0));
   CHECK(s.skeleton().size() == 21);
   CHECK(s.skeleton().names[0] == "Hips");
   CHECK(s.calibration_report().status == features::CalibrationStatus::Default);
-  // the session starts with the user walking: no calibration from it
+  // the session starts with the user walking: no calibration from it, but the avatar takes the
+  // first upright headset frame's stature (eyes at 0.936 x 1.60 m)
   double t = 0;
   for (; t < 2.0; t += 1 / 72.0) s.push(standing_frame(t, 1.60, true));
   CHECK(s.calibration_report().status == features::CalibrationStatus::Default);
-  CHECK(s.pipeline().user_height() == doctest::Approx(1.75));
+  CHECK(s.calibration_report().sized_from_headset);
+  CHECK(s.pipeline().user_height() == doctest::Approx(1.60).epsilon(0.005));
+  CHECK(s.resizes() == 1);
   REQUIRE(s.has_output());
   // then stands still for 2.5 s: calibrated at 1.60 m (eye height / 0.936), avatar resized once
   for (const double t0 = t; t < t0 + 2.5; t += 1 / 72.0) s.push(standing_frame(t, 1.60));
@@ -74,8 +77,7 @@ TEST_CASE("QuestSim session: the default body until the user stands, then the st
   CHECK(r.stature == doctest::Approx(1.60).epsilon(0.005));
   CHECK(s.pipeline().user_height() == doctest::Approx(r.stature).epsilon(0.01));
   CHECK(s.user_scale() == doctest::Approx(1.60 / 1.75).epsilon(0.01));
-  CHECK(s.resizes() >= 1);
-  CHECK(s.resizes() <= 2);  // the provisional estimate and at most one refinement beyond 1 cm
+  CHECK(s.resizes() == 1);  // the stand agreed with the first frame's size within 1 cm
   // the output: the simulated bodies in skeleton units (x user_scale: metres), under the headset
   REQUIRE(s.has_output());
   const int head = s.joint_map()[pose::Role::Head];

@@ -8,8 +8,10 @@
 // Calibration. The policy observes the devices' own frames (no offsets to calibrate); the one user
 // parameter is the height h that sizes the avatar and is the observation's o_user,scale (§3.6). It
 // comes from features::AutoCalibration run on the pipeline's sanitised ticks: the stature of the
-// user's standing windows (eye height / 0.936), the default 1.75 m body until one is found (never
-// smaller than the first upright headset frame shows), a refusal outside [1.2, 2.2] m. Whenever
+// user's standing windows (eye height / 0.936); until one is found, the stature of the first upright
+// headset frame (the paper sizes its character from the headset; a 1.75 m default body under a
+// 1.55 m user's headset crouches: the validation split's performers are 1.45-1.62 m by this rule),
+// or the 1.75 m default before that; a refusal outside [1.2, 2.2] m. Whenever
 // the estimate moves by more than resize_threshold (1 cm), the avatar is rescaled in place
 // (QuestSimPipeline::set_user_height: no allocation) and stands again under the headset on the
 // next tick; counted in resizes() and restarts(). calibrate(frame) takes one upright frame (a
@@ -36,9 +38,17 @@
 
 namespace sparsebody::avatar {
 
+inline features::AutoCalibrationConfig questsim_calibration_defaults() noexcept {
+  features::AutoCalibrationConfig c;
+  c.size_from_headset_both_ways = true;  // the avatar as tall as the first upright headset frame says
+  return c;
+}
+
 struct QuestSimSessionConfig {
   QuestSimConfig questsim{};
-  features::AutoCalibrationConfig calibration{};  // the standing-window search (enabled by default)
+  // The standing-window search (enabled by default); before it finds one, the first upright
+  // headset frame sizes the avatar, up or down (size_from_headset_both_ways).
+  features::AutoCalibrationConfig calibration = questsim_calibration_defaults();
   features::DeviceModel devices{};                // where the headset sits on the head (the eye point)
   double resize_threshold = 0.01;                 // m of stature: smaller refinements keep the avatar
 };

@@ -82,6 +82,11 @@ struct AutoCalibrationConfig {
   bool estimate_floor = false;         // floor from the standing eye height (stature assumed)
   double assumed_stature = 1.70;       // m, with estimate_floor
   bool size_from_headset = true;       // the default body no smaller than the first upright headset frame shows (not with estimate_floor)
+  // ... and no larger either: the default body takes the first upright headset frame's stature
+  // (within [min_stature, max_stature]) whether above or below the default's. For a simulated
+  // avatar as tall as the user (QuestSim sizes its character from the headset, §3.6): a 1.75 m
+  // body under a 1.55 m user's headset crouches; a kinematic pipeline keeps the lower bound only.
+  bool size_from_headset_both_ways = false;
 };
 
 class AutoCalibration {
@@ -234,7 +239,9 @@ class AutoCalibration {
     sized_ = true;
     const double eye = pose[0].position.y() - calib_.floor;
     const double stature = eye / cfg_.eye_height_ratio;
-    if (!(stature > default_stature() * 1.01) || !(stature <= cfg_.max_stature)) return false;
+    const bool larger = stature > default_stature() * 1.01;
+    const bool smaller = cfg_.size_from_headset_both_ways && stature < default_stature() * 0.99 && stature >= cfg_.min_stature;
+    if (!(larger || smaller) || !(stature <= cfg_.max_stature)) return false;
     const double s = scale_of_eye(eye);
     if (!(s > 0) || !std::isfinite(s)) return false;
     calib_.scale = s;
@@ -242,8 +249,11 @@ class AutoCalibration {
     report_.eye_height = eye;
     report_.scale = s;
     report_.sized_from_headset = true;
+    report_.sized_lower_bound = !cfg_.size_from_headset_both_ways;
     std::snprintf(report_.message, sizeof report_.message,
-                  "no standing frame yet: default body sized to the headset (stature >= %.2f m)", stature);
+                  report_.sized_lower_bound ? "no standing frame yet: default body sized to the headset (stature >= %.2f m)"
+                         : "no standing frame yet: default body sized to the first upright headset frame (stature ~%.2f m)",
+                  stature);
     return true;
   }
 

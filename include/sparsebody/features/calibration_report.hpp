@@ -44,6 +44,9 @@ struct CalibrationReport {
   // height (AutoCalibrationConfig::size_from_headset): a lower bound on the stature, not a
   // calibration.
   bool sized_from_headset = false;
+  // ... as a lower bound (the default); false with size_from_headset_both_ways: an estimate from a
+  // frame that need not be standing (up or down).
+  bool sized_lower_bound = false;
   char message[192] = "no standing frame yet: default body";  // one line
 };
 
