@@ -9,7 +9,7 @@
 #include "sparsebody/avatar/lobstr_pipeline.hpp"
 #include "sparsebody/avatar/n3p_direct.hpp"
 #include "sparsebody/avatar/n3p_physics.hpp"
-#include "sparsebody/avatar/questsim.hpp"
+#include "sparsebody/avatar/questsim_session.hpp"
 #include "sparsebody/pose/joint_map.hpp"
 
 namespace soak {
@@ -82,34 +82,34 @@ struct N3PPhysicsAdapter
   }
 };
 
-// QuestSim has no calibration (the avatar is sized from the headset) and shows the simulated
-// character itself: its head body against the headset.
+// QuestSim through its session (what the demo and the C API run): the avatar sized by the automatic
+// calibration, resized on a calibration request; its head body against the headset.
 template <class W>
 struct QuestSimAdapter {
-  using P = sb::avatar::QuestSimPipeline<float, W>;
+  using P = sb::avatar::QuestSimSession<float, W>;
   std::unique_ptr<P> pipe;
   int head = 0;
 
-  QuestSimAdapter(const std::string& policy, const sb::trackers::TrackerFrame& standing) {
-    pipe = std::make_unique<P>(P::load_weights(policy), sb::avatar::user_height_from_headset(standing));
-    head = std::max(0, pipe->simulator().model().find("Head"));
+  explicit QuestSimAdapter(const std::string& policy) {
+    pipe = std::make_unique<P>(P::load(policy));
+    head = pipe->joint_map()[sb::pose::Role::Head];
   }
   int push(const sb::trackers::TrackerFrame& f) { return pipe->push(f); }
   bool output_finite() const {
-    const auto& sim = pipe->simulator();
-    return sim.q().allFinite() && sim.v().allFinite();
+    const auto& sim = pipe->pipeline().simulator();
+    return sim.q().allFinite() && sim.v().allFinite() && (!pipe->has_output() || world_finite(pipe->world()));
   }
   double head_distance(const sb::trackers::TrackerFrame& f) const {
-    const auto& p = pipe->simulator().data().p[head];
-    return horizontal(Eigen::Vector3d(p.x(), p.y(), p.z()), f.pose[0].position);
+    return pipe->has_output() ? horizontal(pipe->world().position[head] * pipe->user_scale(), f.pose[0].position) : 0.0;
   }
-  void calibrate_on(const sb::trackers::TrackerFrame&) {}
-  void restore_calibration() {}
+  void calibrate_on(const sb::trackers::TrackerFrame& f) { pipe->calibrate(f); }  // a request on an arbitrary frame
+  void restore_calibration() { pipe->recalibrate(); }  // back to the automatic search
   void counters(Report& r) const {
-    r.max_drift_p99 = -1;  // a random-weight policy falls all the time: drift is reported only
-    r.falls = pipe->falls();
-    r.resets = pipe->tracker_resets();
-    r.sim_failures = pipe->simulation_failures();
+    r.max_drift_p99 = -1;  // the shipped policy still falls ~37 times a minute: drift is reported only
+    const auto& q = pipe->pipeline();
+    r.falls = q.falls();
+    r.resets = q.tracker_resets() + pipe->resizes();
+    r.sim_failures = q.simulation_failures();
   }
 };
 

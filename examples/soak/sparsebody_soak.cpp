@@ -7,7 +7,7 @@
 //   - falls, resets and failed simulation steps counted.
 // Usage:
 //   sparsebody_soak --pipeline lobstr|n3p|n3p_physics|questsim --clips DIR [--hours H | --minutes M]
-//                   [--seed N] [--storage float|f16|q8] [--questsim-policy FILE] [--json FILE]
+//                   [--seed N] [--storage float|f16|q8] [--questsim-policy FILE (default: the shipped one)] [--json FILE]
 // Exit codes: 0 all checks passed, 1 a check failed, 2 bad command line or input.
 // SOAK_TRACE=1 in the environment prints one line per output: input time, event, head distance,
 // whether it counts (outside the quiet window after an event).
@@ -69,7 +69,7 @@ Options parse(int argc, char** argv) {
   }
   if (o.pipeline.empty() || o.clips.empty() || !(o.hours > 0)) usage("--pipeline, --clips and --hours/--minutes are required");
   if (o.storage != "float" && o.storage != "f16" && o.storage != "q8") usage("--storage: expected float, f16 or q8");
-  if (o.pipeline == "questsim" && o.questsim_policy.empty()) usage("--pipeline questsim needs --questsim-policy FILE");
+  if (o.pipeline == "questsim" && o.questsim_policy.empty()) o.questsim_policy = SPARSEBODY_DEFAULT_QUESTSIM_WEIGHTS;
   return o;
 }
 
@@ -136,7 +136,7 @@ int dispatch(const std::vector<soak::Clip>& clips, const Options& o, double clip
     if constexpr (std::is_same_v<W, sparsebody::nn::f16>) usage("n3p_physics: storage float or q8");
     else return soak_with<soak::N3PPhysicsAdapter<W>>(clips, o, clip_leg);
   }
-  if (o.pipeline == "questsim") return soak_with<soak::QuestSimAdapter<W>>(clips, o, o.questsim_policy, clips.front().frames.front());
+  if (o.pipeline == "questsim") return soak_with<soak::QuestSimAdapter<W>>(clips, o, o.questsim_policy);
   usage(("unknown pipeline '" + o.pipeline + "'").c_str());
 }
 
