@@ -51,7 +51,7 @@ struct Histogram {
 struct Report {
   static constexpr long long kMaxRssGrowth = 1 << 20;  // 1 MB
   // Head vs headset, horizontal, away from events: p99 bound (m) set per pipeline by its adapter;
-  // negative: reported, not checked (the shipped QuestSim policy still falls ~37 times a minute).
+  // negative: reported, not checked (the shipped QuestSim policy still falls ~33 times a minute).
   double max_drift_p99 = 0.5;
 
   std::string pipeline;

@@ -105,7 +105,7 @@ struct QuestSimAdapter {
   void calibrate_on(const sb::trackers::TrackerFrame& f) { pipe->calibrate(f); }  // a request on an arbitrary frame
   void restore_calibration() { pipe->recalibrate(); }  // back to the automatic search
   void counters(Report& r) const {
-    r.max_drift_p99 = -1;  // the shipped policy still falls ~37 times a minute: drift is reported only
+    r.max_drift_p99 = -1;  // the shipped policy still falls ~33 times a minute: drift is reported only
     const auto& q = pipe->pipeline();
     r.falls = q.falls();
     r.resets = q.tracker_resets() + pipe->resizes();
