@@ -194,7 +194,7 @@ std::optional<Model> choose_model(const Options& o, const Input& in) {
   }
   if (o.physics && o.model == Model::Auto) {
     std::printf("choice  Neural3Points: --physics asks for its normal (simulated) mode, which tracks closer than QuestSim's\n"
-                "        CPU-trained policy (validation: MPJPE 26.5 vs 36.3 cm; README); --model questsim runs that\n");
+                "        CPU-trained policy (validation: MPJPE 26.5 vs 35.6 cm; README); --model questsim runs that\n");
     return Model::N3P;
   }
   if (o.model == Model::Auto) {
