@@ -130,6 +130,8 @@ def main(argv=None):
     a = ap.parse_args(argv)
     sb = load_sb()
     rx = re.compile(a.motions)
+    if a.every < 1 or not 0 <= a.offset < a.every:
+        raise SystemExit(f"--every {a.every} --offset {a.offset}: expected every >= 1 and 0 <= offset < every")
     paths = [p for p in sorted(glob.glob(os.path.join(a.clips, "*.bvh"))) if rx.search(os.path.basename(p))][a.offset::a.every]
     if not paths:
         raise SystemExit(f"error: no clips in {a.clips} match {a.motions!r}")
