@@ -247,3 +247,73 @@ TEST_CASE("stillness: still after 0.3 s of a calm headset, not while walking or 
   CHECK_FALSE(u.still());
   CHECK(std::isfinite(u.speed()));
 }
+
+// The stop test (issue 12, csv stands): a walker who stops dead is still within stop_seconds, once
+// (stopped_now on that frame only); not at a stream's start (the slow entry handles a user who
+// stands from the first frame), not while creeping forward or turning after the stop; off with
+// stop_seconds = 0 (the low-pass alone then takes ~0.9 s).
+TEST_CASE("stillness: a dead stop is still within 0.2 s; not a creep, a turn or a stream's start") {
+  const double dt = 1.0 / 30;
+  const Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+  auto frames_to_still = [&](trackers::StillnessConfig c, double creep, double turn_rate, int* stops) {
+    trackers::Stillness s(c);
+    double x = 0;
+    for (int i = 0; i < 60; ++i) s.update(Vector3d(x += 1.3 * dt, 1.6, 0), q, dt);  // walking 1.3 m/s
+    REQUIRE_FALSE(s.still());
+    *stops = 0;
+    for (int i = 0; i < 60; ++i) {
+      const Eigen::Quaterniond r(Eigen::AngleAxisd(i * dt * turn_rate, Vector3d::UnitY()));
+      s.update(Vector3d(x += creep * dt, 1.6, 0), r, dt);
+      *stops += s.stopped_now();
+      if (s.still()) return i;
+    }
+    return -1;
+  };
+  int stops = 0;
+  const int quick = frames_to_still({}, 0.0, 0.0, &stops);
+  CHECK(quick == 5);  // 0.2 s at 30 Hz: the 6 past frames (the last walking one is where it stopped) within 1.5 cm
+  CHECK(stops == 1);
+  trackers::StillnessConfig off;
+  off.stop_seconds = 0;
+  const int slow = frames_to_still(off, 0.0, 0.0, &stops);
+  CHECK(slow > 20);  // the low-pass from 1.3 m/s to 0.06 m/s, then 0.3 s
+  CHECK(stops == 0);
+  MESSAGE("still after a dead stop: " << quick << " frames with the stop test, " << slow << " without");
+  CHECK(frames_to_still({}, 0.10, 0.0, &stops) == -1);  // creeping on at 10 cm/s (2 cm per 0.2 s): moving
+  CHECK(frames_to_still({}, 0.0, 0.5, &stops) == -1);  // turning at 29 deg/s: not still at all
+  trackers::Stillness t;  // standing from the first frame: the slow entry, no stop event
+  int first = -1, events = 0;
+  for (int i = 0; i < 30; ++i) {
+    t.update(Vector3d(0, 1.6, 0), q, dt);
+    events += t.stopped_now();
+    if (t.still() && first < 0) first = i;
+  }
+  CHECK(events == 0);
+  CHECK(first >= 9);
+}
+
+// lock_in_place: the foot locks where it was last shown (x, z scaled with the ground by k) and
+// eases down to the lock height; under the hold it stays whatever the network does next; a foot
+// never shown just resets.
+TEST_CASE("foot lock: lock_in_place holds the shown foot, scaled with the ground, easing down") {
+  const Vector3d hip(0, 0.9, 0);
+  Vector3d target;
+  pose::FootLock a(10);
+  CHECK_FALSE(a.update(false, Vector3d(0.2, 0.09, 0.3), hip, 1.0, 0.1, 0.042, target));  // free, in the air
+  const double h = 0.042;
+  a.lock_in_place(1.1, &h);
+  CHECK(a.state() == pose::FootLock::State::Locked);
+  a.hold(true);
+  double y_prev = 0.09;
+  for (int i = 0; i < 12; ++i) {  // the network swings the foot 30 cm away: ignored under the hold
+    REQUIRE(a.update(false, Vector3d(0.2, 0.09, 0.3 - 0.03 * i), hip, 1.0, 0.1, 0.042, target));
+    CHECK(target.x() == doctest::Approx(0.22));
+    CHECK(target.z() == doctest::Approx(0.33));
+    CHECK(target.y() <= y_prev + 1e-12);
+    y_prev = target.y();
+  }
+  CHECK(target.y() == doctest::Approx(0.042));
+  pose::FootLock b(10);  // never shown: nothing to hold
+  b.lock_in_place(1.0, &h);
+  CHECK(b.state() == pose::FootLock::State::Free);
+}

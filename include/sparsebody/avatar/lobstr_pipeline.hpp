@@ -21,6 +21,7 @@
 // frame) and set_calibration(c) are explicit: used as given, the search stops until recalibrate().
 // Per frame: no allocation, no exception, no lock. Everything is sized at construction.
 #pragma once
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -163,7 +164,9 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       // window is not over yet (restarting it left the feet unheld for ~0.3 s in the stand the
       // calibration is found in).
       const trackers::Stillness still = still_;
-      if (!features::refines_size(k)) {
+      const std::array<pose::FootLock, 2> locks{lock_[0], lock_[1]};
+      const bool restart = !features::refines_size(k);
+      if (restart) {
         reset_state();
       } else {
         feat_.reset();
@@ -178,6 +181,14 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       still_ = still;
       still_.rebase();  // the headset's calibrated pose jumps with the new offsets
       still_.assume_still();
+      // A restart while the user stands (the calibrator's window): the feet stay where they were
+      // shown, locked, instead of snapping to the restarted network's first stance.
+      if (restart && cfg_.hold_feet_when_still && cfg_.contact_ik && still_.still()) {
+        for (int i = 0; i < 2; ++i) {
+          lock_[i] = locks[i];
+          lock_[i].lock_in_place(k, &meta_.toe_height);
+        }
+      }
     }
     calib_.apply(s.pose, cal_);
     still_.update(cal_[0].position, cal_[0].orientation, 1.0 / meta_.frame_rate);
@@ -275,6 +286,8 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       Eigen::Vector3d target;
       const bool still = cfg_.hold_feet_when_still && still_.still();
       lock_[foot].hold(still);
+      if (still && still_.stopped_now() && lock_[foot].state() != pose::FootLock::State::Locked)
+        lock_[foot].lock_in_place(1.0, &meta_.toe_height);
       const bool in_contact = contact(foot) || (still && contact_probability(foot) > cfg_.still_contact_threshold);
       if (!lock_[foot].update(in_contact, out_.world().position[toe], hip, reach, cfg_.lock_max_drift, meta_.toe_height, target)) continue;
       // ankle target keeps the foot's world orientation: ankle = target - (toe - ankle)

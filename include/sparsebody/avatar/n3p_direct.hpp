@@ -212,7 +212,9 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       // the stillness detector (on the raw headset) carries on, and says still if the calibrator's
       // standing window is not over yet (as LoBSTr's).
       const trackers::Stillness still = still_;
-      if (!features::refines_size(k)) {
+      const std::array<pose::FootLock, 2> locks{lock_[0], lock_[1]};
+      const bool restart = !features::refines_size(k);
+      if (restart) {
         reset_state();
       } else {
         pred_.rescale_ground(k);
@@ -221,6 +223,14 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       }
       still_ = still;
       still_.assume_still();
+      // A restart while the user stands (the calibrator's window): the feet stay pinned where they
+      // were shown instead of snapping to the restarted predictor's first stance.
+      if (restart && cfg_.hold_feet_when_still && cfg_.foot_ik && still_.still()) {
+        for (int i = 0; i < 2; ++i) {
+          lock_[i] = locks[i];
+          lock_[i].lock_in_place(k);
+        }
+      }
       ++calibration_changes_;
     }
     features::n3p::TrackerSet o;
@@ -333,6 +343,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       Eigen::Vector3d target;
       const bool still = cfg_.hold_feet_when_still && still_.still();
       lock_[side].hold(still);
+      if (still && still_.stopped_now() && lock_[side].state() != pose::FootLock::State::Locked) lock_[side].lock_in_place();
       const bool c = contact(side) || (still && contact_probability(side) > cfg_.still_contact_threshold);
       const bool was_locked = lock_[side].state() == pose::FootLock::State::Locked;
       if (lock_[side].update(c, out_.world().position[l[2]], out_.world().position[l[0]], reach_[side], cfg_.foot_max_drift,

@@ -43,6 +43,23 @@ class FootLock {
     for (Eigen::Vector3d* p : {&lock_, &from_, &current_, &last_joint_}) p->x() *= k, p->z() *= k;
   }
   State state() const noexcept { return state_; }
+  // Lock now where the foot was last shown, moved with the ground (x and z x k), easing to
+  // `lock_height` (nullptr: keeps its height); a foot never shown resets. For the two moments the
+  // network's foot must not be followed: it restarted while the user stands (a calibration changed
+  // the body's size by k: its first pose is a default stance, and free feet snapped to it, up to
+  // 24 cm in one frame in offdist's csv), and the user just stopped dead (trackers::Stillness's
+  // stop test, k = 1: the network walks on for a step or so).
+  void lock_in_place(double k = 1.0, const double* lock_height = nullptr) noexcept {
+    if (!shown_) { reset(); return; }
+    Eigen::Vector3d p = current_;
+    p.x() *= k, p.z() *= k;
+    reset();
+    state_ = State::Locked;
+    from_ = lock_ = current_ = last_joint_ = p;
+    if (lock_height) lock_.y() = *lock_height;
+    settle_ = 0;
+    shown_ = true;
+  }
   // Under hold, how far (m per frame, the joint's units) the network's joint may move for a held-off
   // free foot to lock; the pipelines set speed / frame rate. Kept by reset().
   void set_hold_rearm_step(double metres) noexcept { rearm_step_ = metres; }
