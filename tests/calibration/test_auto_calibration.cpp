@@ -428,7 +428,7 @@ TEST_CASE("LoBSTr pipeline: a calibration that barely changes the size keeps the
 // that walks from frame 0 (default body), stops within one frame and stands 4 s (the first
 // calibration is found in that stand), then walks on. From 0.8 s into the stand both feet are held
 // and the toes do not move; without the stillness hold they creep. The stillness detector's stop
-// test holds the feet 0.2 s after the stop (the network otherwise walks on for a step), so the toes
+// test holds the feet 0.1 s after the stop (the network otherwise walks on for a step), so the toes
 // travel less in the stand's first 0.8 s than with the low-pass entry alone. The first calibration
 // restarts the GRU (the body's size changes by more than 5 %) but the feet stay where they were
 // shown (FootLock::lock_in_place): before that they snapped ~4 cm to the restarted network's stance.

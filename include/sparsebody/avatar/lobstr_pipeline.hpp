@@ -21,6 +21,7 @@
 // frame) and set_calibration(c) are explicit: used as given, the search stops until recalibrate().
 // Per frame: no allocation, no exception, no lock. Everything is sized at construction.
 #pragma once
+#include <algorithm>
 #include <array>
 #include <memory>
 #include <string>
@@ -187,6 +188,8 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
         for (int i = 0; i < 2; ++i) {
           lock_[i] = locks[i];
           lock_[i].lock_in_place(k, &meta_.toe_height);
+          planted_[i] = shown_foot_[i];  // the last shown foot, kept
+          plant_w_[i] = 1;
         }
       }
     }
@@ -246,6 +249,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     feat_.reset();
     lock_[0].reset();
     lock_[1].reset();
+    plant_w_[0] = plant_w_[1] = 0;
     still_.reset();
     filled_ = 0;
     head_ = 0;
@@ -286,12 +290,30 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       Eigen::Vector3d target;
       const bool still = cfg_.hold_feet_when_still && still_.still();
       lock_[foot].hold(still);
-      if (still && still_.stopped_now() && lock_[foot].state() != pose::FootLock::State::Locked)
-        lock_[foot].lock_in_place(1.0, &meta_.toe_height);
+      bool was_locked = lock_[foot].state() == pose::FootLock::State::Locked;
+      // The user just stopped: the foot stays as shown last frame, locked and planted at once
+      // (a lock from the walk keeps its place but not its older orientation).
+      if (still && still_.stopped_now()) {
+        if (!was_locked) lock_[foot].lock_in_place(1.0, &meta_.toe_height);
+        planted_[foot] = shown_foot_[foot];
+        plant_w_[foot] = 1;
+        was_locked = true;
+      }
       const bool in_contact = contact(foot) || (still && contact_probability(foot) > cfg_.still_contact_threshold);
-      if (!lock_[foot].update(in_contact, out_.world().position[toe], hip, reach, cfg_.lock_max_drift, meta_.toe_height, target)) continue;
+      if (!lock_[foot].update(in_contact, out_.world().position[toe], hip, reach, cfg_.lock_max_drift, meta_.toe_height, target)) {
+        plant_w_[foot] = 0;  // free: the predicted orientation
+        continue;
+      }
+      // While the user stands a locked foot keeps the orientation it was planted with (the
+      // network may still roll it heel-up for a step it will not take, and the leg then cannot
+      // reach: the toe slid), eased in and out over 10 frames, as Neural3Points' pins.
+      const bool locked = lock_[foot].state() == pose::FootLock::State::Locked;
+      Eigen::Quaterniond& foot_w = out_.world().rotation[ft];
+      if (locked && !was_locked) planted_[foot] = foot_w;
+      plant_w_[foot] += std::clamp((locked && still ? 1.0 : 0.0) - plant_w_[foot], -0.1, 0.1);
+      if (plant_w_[foot] > 0) foot_w = foot_w.slerp(plant_w_[foot], planted_[foot]).normalized();
       // ankle target keeps the foot's world orientation: ankle = target - (toe - ankle)
-      const Eigen::Vector3d ankle_t = target - (out_.world().position[toe] - out_.world().position[ft]);
+      const Eigen::Vector3d ankle_t = target - foot_w * s.offsets[toe];
       const pose::WorldPose& w = out_.world();
       const Eigen::Vector3d &a = w.position[ul], &b = w.position[ll], &c = w.position[ft];
       const Eigen::Vector3d fwd = cal_[3].orientation.toRotationMatrix().col(2);
@@ -302,6 +324,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       changed = true;
     }
     if (changed) pose::forward_kinematics(s, out_.pose(), out_.world());
+    for (int foot = 0; foot < 2; ++foot) shown_foot_[foot] = out_.world().rotation[meta_.lower[4 * foot + 2]];
   }
 
   LoBSTrConfig cfg_;
@@ -316,6 +339,9 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   T x_[kFeatures] = {};
   T y_[Net::out_size] = {};
   pose::FootLock lock_[2];
+  Eigen::Quaterniond planted_[2] = {Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};  // at the lock
+  double plant_w_[2] = {0, 0};  // how much of planted_ a locked foot keeps while still (0..1)
+  Eigen::Quaterniond shown_foot_[2] = {Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};  // last output's
   trackers::Stillness still_;
   std::vector<T> ring_;
   int window_ = 30, filled_ = 0, head_ = 0;

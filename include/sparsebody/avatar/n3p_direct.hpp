@@ -229,6 +229,8 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
         for (int i = 0; i < 2; ++i) {
           lock_[i] = locks[i];
           lock_[i].lock_in_place(k);
+          planted_[i] = shown_foot_[i];  // the last shown foot, kept
+          plant_w_[i] = 1;
         }
       }
       ++calibration_changes_;
@@ -343,9 +345,16 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       Eigen::Vector3d target;
       const bool still = cfg_.hold_feet_when_still && still_.still();
       lock_[side].hold(still);
-      if (still && still_.stopped_now() && lock_[side].state() != pose::FootLock::State::Locked) lock_[side].lock_in_place();
       const bool c = contact(side) || (still && contact_probability(side) > cfg_.still_contact_threshold);
-      const bool was_locked = lock_[side].state() == pose::FootLock::State::Locked;
+      bool was_locked = lock_[side].state() == pose::FootLock::State::Locked;
+      // The user just stopped: the foot stays as shown last frame, locked and planted at once
+      // (a lock from the walk keeps its place but not its older orientation).
+      if (still && still_.stopped_now()) {
+        if (!was_locked) lock_[side].lock_in_place();
+        planted_[side] = shown_foot_[side];
+        plant_w_[side] = 1;
+        was_locked = true;
+      }
       if (lock_[side].update(c, out_.world().position[l[2]], out_.world().position[l[0]], reach_[side], cfg_.foot_max_drift,
                              target)) {
         const bool locked = lock_[side].state() == pose::FootLock::State::Locked;
@@ -359,6 +368,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       } else {
         plant_w_[side] = 0;  // free: the predicted orientation
       }
+      shown_foot_[side] = out_.world().rotation[l[2]];
     }
   }
 
@@ -393,6 +403,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   pose::ChainReach spine_;
   Eigen::Quaterniond planted_[2] = {Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};  // at the lock
   double plant_w_[2] = {0, 0};  // how much of planted_ the locked foot keeps (0..1)
+  Eigen::Quaterniond shown_foot_[2] = {Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};  // last output's
   double reach_[2] = {};
 };
 

@@ -53,7 +53,9 @@ class FootLock {
     if (!shown_) { reset(); return; }
     Eigen::Vector3d p = current_;
     p.x() *= k, p.z() *= k;
+    const bool hold = hold_;  // as the caller set it for this frame
     reset();
+    hold_ = hold;
     state_ = State::Locked;
     from_ = lock_ = current_ = last_joint_ = p;
     if (lock_height) lock_.y() = *lock_height;
