@@ -281,6 +281,20 @@ TEST_CASE("stillness: a dead stop is still after 0.1 s; not a creep, a turn or a
   MESSAGE("still after a dead stop: " << quick << " frames with the stop test, " << slow << " without");
   CHECK(frames_to_still({}, 0.15, 0.0, &stops) == -1);  // creeping on at 15 cm/s (1.5 cm per 0.1 s): moving
   CHECK(frames_to_still({}, 0.0, 0.5, &stops) == -1);  // turning at 29 deg/s: not still at all
+  {  // a real stop: 1.3 m/s down to 0 over 0.5 s, then standing; still within 0.2 s of standing
+    trackers::Stillness d;
+    double x = 0;
+    for (int i = 0; i < 60; ++i) d.update(Vector3d(x += 1.3 * dt, 1.6, 0), q, dt);
+    for (int i = 1; i <= 15; ++i) d.update(Vector3d(x += 1.3 * (1.0 - i / 15.0) * dt, 1.6, 0), q, dt);
+    int standing = -1;
+    for (int i = 0; i < 30 && standing < 0; ++i) {
+      d.update(Vector3d(x, 1.6, 0), q, dt);
+      if (d.still()) standing = i;
+    }
+    CHECK(standing >= 0);
+    CHECK(standing <= 6);
+    MESSAGE("still " << standing << " frames after a 0.5 s deceleration ends");
+  }
   trackers::Stillness t;  // standing from the first frame: the slow entry, no stop event
   int first = -1, events = 0;
   for (int i = 0; i < 30; ++i) {
