@@ -295,6 +295,18 @@ TEST_CASE("stillness: a dead stop is still after 0.1 s; not a creep, a turn or a
     CHECK(standing <= 6);
     MESSAGE("still " << standing << " frames after a 0.5 s deceleration ends");
   }
+  {  // a new calibration's scale between the stop and the test firing: the history is rescaled too
+    trackers::Stillness r;
+    double x = 0;
+    for (int i = 0; i < 60; ++i) r.update(Vector3d(x += 1.3 * dt, 1.6, 0), q, dt);
+    r.rescale(1.1);
+    int frames = -1;
+    for (int i = 0; i < 10 && frames < 0; ++i) {
+      r.update(Vector3d(1.1 * x, 1.6, 0), q, dt);
+      if (r.still()) frames = i;
+    }
+    CHECK(frames == 2);  // as without a rescale (an old-scale history, 26 cm away, delays it a frame)
+  }
   trackers::Stillness t;  // standing from the first frame: the slow entry, no stop event
   int first = -1, events = 0;
   for (int i = 0; i < 30; ++i) {

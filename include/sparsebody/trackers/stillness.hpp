@@ -40,7 +40,10 @@ class Stillness {
   // now stands, so both feet are on the floor whatever a network still says.
   bool stopped_now() const noexcept { return stop_; }
   // Positions given in a scale that changed by k (a new calibration): keep the history consistent.
-  void rescale(double k) noexcept { p_.x() *= k, p_.z() *= k; }
+  void rescale(double k) noexcept {
+    p_.x() *= k, p_.z() *= k;
+    for (Eigen::Vector3d& r : ring_) r.x() *= k, r.y() *= k;  // (x, z, yaw): the stop test's history too
+  }
   // The positions' frame changed (a new calibration's offsets and scale): the next frame starts
   // the difference again; the filtered speeds and the still state carry on.
   void rebase() noexcept { have_ = false; n_ = 0; }
