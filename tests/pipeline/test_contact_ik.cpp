@@ -279,6 +279,14 @@ TEST_CASE("stillness: a dead stop is still after 0.1 s; not a creep, a turn or a
   CHECK(slow > 20);  // the low-pass from 1.3 m/s to 0.06 m/s, then 0.3 s
   CHECK(stops == 0);
   MESSAGE("still after a dead stop: " << quick << " frames with the stop test, " << slow << " without");
+  trackers::StillnessConfig bad;  // a NaN radius or angle: the stop test never fires
+  bad.stop_radius = NAN;
+  CHECK(frames_to_still(bad, 0.0, 0.0, &stops) > 20);
+  CHECK(stops == 0);
+  bad = {};
+  bad.stop_yaw = NAN;
+  CHECK(frames_to_still(bad, 0.0, 0.0, &stops) > 20);
+  CHECK(stops == 0);
   CHECK(frames_to_still({}, 0.15, 0.0, &stops) == -1);  // creeping on at 15 cm/s (1.5 cm per 0.1 s): moving
   CHECK(frames_to_still({}, 0.0, 0.5, &stops) == -1);  // turning at 29 deg/s: not still at all
   {  // a real stop: 1.3 m/s down to 0 over 0.5 s, then standing; still within 0.2 s of standing

@@ -98,8 +98,9 @@ class Stillness {
     if (need > n_ || need < 1) return false;  // not enough history (or a window longer than the ring)
     for (int i = 1; i <= need; ++i) {
       const Eigen::Vector3d& r = ring_[(head_ - i + kRing) % kRing];
-      if (std::hypot(p.x() - r.x(), p.z() - r.y()) > cfg_.stop_radius ||
-          std::abs(std::remainder(yaw - r.z(), 2 * M_PI)) > cfg_.stop_yaw)
+      // written as !(<=) so that a NaN radius or angle in the config means no stop, not always
+      if (!(std::hypot(p.x() - r.x(), p.z() - r.y()) <= cfg_.stop_radius) ||
+          !(std::abs(std::remainder(yaw - r.z(), 2 * M_PI)) <= cfg_.stop_yaw))
         return false;
     }
     return true;
