@@ -351,3 +351,79 @@ TEST_CASE("foot lock: lock_in_place holds the shown foot, scaled with the ground
   b.lock_in_place(1.0, &h);
   CHECK(b.state() == pose::FootLock::State::Free);
 }
+
+// The held foot's orientation (FootLock::orient / show / stop): while the user stands still a
+// locked foot keeps the orientation it was planted with, eased in over the blend when the lock is
+// older than the stillness, at once when the foot locks while still or at a stop; free: untouched.
+TEST_CASE("foot lock: a held foot keeps its planted orientation while still") {
+  const Vector3d hip(0, 0.9, 0), toe(0.1, 0.04, 0.2);
+  const Eigen::Quaterniond flat = Eigen::Quaterniond::Identity();
+  auto pitch = [](double a) { return Eigen::Quaterniond(Eigen::AngleAxisd(a, Vector3d::UnitX())); };
+  Vector3d target;
+  // locked while walking (flat), then the user stands and the network rolls the foot 0.5 rad:
+  // the foot turns back to flat over the 10-frame blend, monotonically
+  pose::FootLock a(10);
+  REQUIRE(a.update(true, toe, hip, 1.0, 0.1, 0.042, target));
+  Eigen::Quaterniond q = flat;
+  a.orient(q, false);
+  CHECK(q.angularDistance(flat) < 1e-12);
+  a.show(q);
+  double prev = 0.5;
+  for (int i = 1; i <= 12; ++i) {
+    a.hold(true);
+    REQUIRE(a.update(true, toe, hip, 1.0, 0.1, 0.042, target));
+    q = pitch(0.5);
+    a.orient(q, true);
+    const double d = q.angularDistance(flat);
+    CHECK(d <= prev + 1e-12);
+    if (i < 10) CHECK(d > 1e-6);  // eased, not snapped
+    prev = d;
+    a.show(q);
+  }
+  CHECK(prev < 1e-9);
+  // moving again: eased back out to the network's orientation
+  for (int i = 0; i < 10; ++i) {
+    a.hold(false);
+    a.update(true, toe, hip, 1.0, 0.1, 0.042, target);
+    q = pitch(0.5);
+    a.orient(q, false);
+  }
+  CHECK(q.angularDistance(pitch(0.5)) < 1e-9);
+
+  // a foot that locks while still keeps the orientation it locked with from that frame on
+  pose::FootLock b(10);
+  b.hold(true);
+  REQUIRE_FALSE(b.update(false, toe, hip, 1.0, 0.1, 0.042, target));
+  b.show(pitch(0.1));
+  b.hold(true);
+  REQUIRE(b.update(true, toe, hip, 1.0, 0.1, 0.042, target));
+  q = pitch(0.2);
+  b.orient(q, true);
+  CHECK(q.angularDistance(pitch(0.2)) < 1e-12);
+  b.show(q);
+  b.hold(true);
+  b.update(true, toe, hip, 1.0, 0.1, 0.042, target);
+  q = pitch(0.6);  // the network rolls it: kept at the lock's 0.2 at once
+  b.orient(q, true);
+  CHECK(q.angularDistance(pitch(0.2)) < 1e-9);
+
+  // a stop: a free foot locks where it was shown with the shown orientation at once; a foot never
+  // shown is not locked and not turned
+  pose::FootLock c(10);
+  REQUIRE_FALSE(c.update(false, toe, hip, 1.0, 0.1, 0.042, target));
+  c.show(pitch(0.3));
+  c.hold(true);
+  const double h = 0.042;
+  c.stop(&h);
+  CHECK(c.state() == pose::FootLock::State::Locked);
+  REQUIRE(c.update(false, toe + Vector3d(0, 0, 0.2), hip, 1.0, 0.1, 0.042, target));
+  CHECK(target.z() == doctest::Approx(toe.z()));
+  q = flat;
+  c.orient(q, true);
+  CHECK(q.angularDistance(pitch(0.3)) < 1e-9);
+  pose::FootLock d(10);
+  d.hold(true);
+  d.stop(&h);
+  CHECK(d.state() == pose::FootLock::State::Free);
+  CHECK_FALSE(d.update(false, toe, hip, 1.0, 0.1, 0.042, target));
+}

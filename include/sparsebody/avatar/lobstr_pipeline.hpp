@@ -187,9 +187,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       if (restart && cfg_.hold_feet_when_still && cfg_.contact_ik && still_.still()) {
         for (int i = 0; i < 2; ++i) {
           lock_[i] = locks[i];
-          lock_[i].lock_in_place(k, &meta_.toe_height);
-          planted_[i] = shown_foot_[i];  // the last shown foot, kept
-          plant_w_[i] = 1;
+          lock_[i].lock_in_place(k, &meta_.toe_height);  // and its last shown orientation
         }
       }
     }
@@ -249,7 +247,6 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     feat_.reset();
     lock_[0].reset();
     lock_[1].reset();
-    plant_w_[0] = plant_w_[1] = 0;
     still_.reset();
     filled_ = 0;
     head_ = 0;
@@ -290,28 +287,15 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       Eigen::Vector3d target;
       const bool still = cfg_.hold_feet_when_still && still_.still();
       lock_[foot].hold(still);
-      bool was_locked = lock_[foot].state() == pose::FootLock::State::Locked;
-      // The user just stopped: the foot stays as shown last frame, locked and planted at once
-      // (a lock from the walk keeps its place but not its older orientation).
-      if (still && still_.stopped_now()) {
-        if (!was_locked) lock_[foot].lock_in_place(1.0, &meta_.toe_height);
-        planted_[foot] = shown_foot_[foot];
-        plant_w_[foot] = 1;
-        was_locked = true;
-      }
+      // The user just stopped: the foot stays as shown last frame (the network walks on for a step).
+      if (still && still_.stopped_now()) lock_[foot].stop(&meta_.toe_height);
       const bool in_contact = contact(foot) || (still && contact_probability(foot) > cfg_.still_contact_threshold);
-      if (!lock_[foot].update(in_contact, out_.world().position[toe], hip, reach, cfg_.lock_max_drift, meta_.toe_height, target)) {
-        plant_w_[foot] = 0;  // free: the predicted orientation
+      if (!lock_[foot].update(in_contact, out_.world().position[toe], hip, reach, cfg_.lock_max_drift, meta_.toe_height, target))
         continue;
-      }
       // While the user stands a locked foot keeps the orientation it was planted with (the
-      // network may still roll it heel-up for a step it will not take, and the leg then cannot
-      // reach: the toe slid), eased in and out over 10 frames, as Neural3Points' pins.
-      const bool locked = lock_[foot].state() == pose::FootLock::State::Locked;
+      // network may still roll it heel-up for a step it will not take), eased over 10 frames.
       Eigen::Quaterniond& foot_w = out_.world().rotation[ft];
-      if (locked && !was_locked) planted_[foot] = foot_w;
-      plant_w_[foot] += std::clamp((locked && still ? 1.0 : 0.0) - plant_w_[foot], -0.1, 0.1);
-      if (plant_w_[foot] > 0) foot_w = foot_w.slerp(plant_w_[foot], planted_[foot]).normalized();
+      lock_[foot].orient(foot_w, still);
       // ankle target keeps the foot's world orientation: ankle = target - (toe - ankle)
       const Eigen::Vector3d ankle_t = target - foot_w * s.offsets[toe];
       const pose::WorldPose& w = out_.world();
@@ -324,7 +308,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       changed = true;
     }
     if (changed) pose::forward_kinematics(s, out_.pose(), out_.world());
-    for (int foot = 0; foot < 2; ++foot) shown_foot_[foot] = out_.world().rotation[meta_.lower[4 * foot + 2]];
+    for (int foot = 0; foot < 2; ++foot) lock_[foot].show(out_.world().rotation[meta_.lower[4 * foot + 2]]);
   }
 
   LoBSTrConfig cfg_;
@@ -338,10 +322,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   std::array<trackers::PoseD, trackers::kTrackerCount> cal_{};
   T x_[kFeatures] = {};
   T y_[Net::out_size] = {};
-  pose::FootLock lock_[2];
-  Eigen::Quaterniond planted_[2] = {Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};  // at the lock
-  double plant_w_[2] = {0, 0};  // how much of planted_ a locked foot keeps while still (0..1)
-  Eigen::Quaterniond shown_foot_[2] = {Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};  // last output's
+  pose::FootLock lock_[2];  // the toes' locks (10-frame blends), with the held feet's orientation
   trackers::Stillness still_;
   std::vector<T> ring_;
   int window_ = 30, filled_ = 0, head_ = 0;

@@ -228,9 +228,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       if (restart && cfg_.hold_feet_when_still && cfg_.foot_ik && still_.still()) {
         for (int i = 0; i < 2; ++i) {
           lock_[i] = locks[i];
-          lock_[i].lock_in_place(k);
-          planted_[i] = shown_foot_[i];  // the last shown foot, kept
-          plant_w_[i] = 1;
+          lock_[i].lock_in_place(k);  // and its last shown orientation
         }
       }
       ++calibration_changes_;
@@ -317,7 +315,6 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     pred_.reset();
     lock_[0].reset();
     lock_[1].reset();
-    plant_w_[0] = plant_w_[1] = 0;
     still_.reset();
   }
 
@@ -346,29 +343,15 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       const bool still = cfg_.hold_feet_when_still && still_.still();
       lock_[side].hold(still);
       const bool c = contact(side) || (still && contact_probability(side) > cfg_.still_contact_threshold);
-      bool was_locked = lock_[side].state() == pose::FootLock::State::Locked;
-      // The user just stopped: the foot stays as shown last frame, locked and planted at once
-      // (a lock from the walk keeps its place but not its older orientation).
-      if (still && still_.stopped_now()) {
-        if (!was_locked) lock_[side].lock_in_place();
-        planted_[side] = shown_foot_[side];
-        plant_w_[side] = 1;
-        was_locked = true;
-      }
+      // The user just stopped: the foot stays as shown last frame (the network walks on for a step).
+      if (still && still_.stopped_now()) lock_[side].stop();
       if (lock_[side].update(c, out_.world().position[l[2]], out_.world().position[l[0]], reach_[side], cfg_.foot_max_drift,
                              target)) {
-        const bool locked = lock_[side].state() == pose::FootLock::State::Locked;
-        Eigen::Quaterniond& foot = out_.world().rotation[l[2]];
-        if (locked && !was_locked) planted_[side] = foot;
-        const double goal = locked && still ? 1.0 : 0.0;
-        plant_w_[side] += std::clamp(goal - plant_w_[side], -1.0 / 8, 1.0 / 8);
-        if (plant_w_[side] > 0) foot = foot.slerp(plant_w_[side], planted_[side]).normalized();
+        lock_[side].orient(out_.world().rotation[l[2]], still);  // planted while still, eased over 8 frames
         put_limb(l, target);
         pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
-      } else {
-        plant_w_[side] = 0;  // free: the predicted orientation
       }
-      shown_foot_[side] = out_.world().rotation[l[2]];
+      lock_[side].show(out_.world().rotation[l[2]]);
     }
   }
 
@@ -401,9 +384,6 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   int arm_[2][3] = {}, leg_[2][3] = {};
   int head_ = -1;
   pose::ChainReach spine_;
-  Eigen::Quaterniond planted_[2] = {Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};  // at the lock
-  double plant_w_[2] = {0, 0};  // how much of planted_ the locked foot keeps (0..1)
-  Eigen::Quaterniond shown_foot_[2] = {Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};  // last output's
   double reach_[2] = {};
 };
 

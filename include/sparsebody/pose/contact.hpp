@@ -21,11 +21,18 @@
 // (stepping with the head still) stays free. A foot locked under hold locks where it was shown the
 // frame before (the prediction may just have jumped, e.g. a calibration restarted the network) and
 // settles to the lock height over `blend_frames` instead of snapping down.
+// Orientation (orient(), show(), stop()): while the user stands still a locked foot keeps the
+// orientation it was planted with, eased in and out over `blend_frames`. The lock holds one point
+// (LoBSTr's toe, direct mode's ankle), so a foot the network turns about it moves the rest of the
+// foot: heel-up for a step it will not take (the leg then cannot reach and the toe slides), or
+// 1.2 cm/s of creep at direct mode's toes.
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <initializer_list>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 namespace sparsebody::pose {
 
@@ -35,7 +42,13 @@ class FootLock {
   enum class Rearm { SameFrame, NextFrame };
 
   explicit FootLock(int blend_frames = 10, Rearm rearm = Rearm::SameFrame) : n_(blend_frames), rearm_(rearm) {}
-  void reset() noexcept { state_ = State::Free; hold_off_ = false; hold_ = false; shown_ = false; settle_ = n_; }
+  // Free, nothing shown; the rearm step is kept.
+  void reset() noexcept {
+    state_ = State::Free;
+    hold_off_ = hold_ = shown_ = just_locked_ = false;
+    settle_ = n_;
+    plant_w_ = 0;
+  }
   void hold(bool h) noexcept { hold_ = h; }
   // The world's scale changed by k (a new calibration: positions are in the standard skeleton's
   // scale): the lock moves with the ground (x and z x k); heights are the body's, kept.
@@ -49,6 +62,7 @@ class FootLock {
   // the body's size by k: its first pose is a default stance, and free feet snapped to it, up to
   // 24 cm in one frame in offdist's csv), and the user just stopped dead (trackers::Stillness's
   // stop test, k = 1: the network walks on for a step or so).
+  // The foot also keeps the orientation it was shown with (show()), at once.
   void lock_in_place(double k = 1.0, const double* lock_height = nullptr) noexcept {
     if (!shown_) { reset(); return; }
     Eigen::Vector3d p = current_;
@@ -61,7 +75,32 @@ class FootLock {
     if (lock_height) lock_.y() = *lock_height;
     settle_ = 0;
     shown_ = true;
+    plant_as_shown();
   }
+  // The user just stopped (trackers::Stillness::stopped_now()), before this frame's update(): the
+  // foot stays as it was shown last frame, locked (a lock from the walk keeps its place) and planted
+  // with its shown orientation at once (not the lock's older one).
+  void stop(const double* lock_height = nullptr) noexcept {
+    if (state_ != State::Locked) lock_in_place(1.0, lock_height);
+    else plant_as_shown();
+  }
+
+  // After an update() that returned true: `foot`, the foot joint's world rotation this frame, turns
+  // towards the orientation it was planted with (the one it had when it locked, or as shown at a
+  // stop or a restart) while `still`; eased in and out over blend_frames. A foot that locks while
+  // still is planted at once: it has its planted orientation already.
+  void orient(Eigen::Quaterniond& foot, bool still) noexcept {
+    const bool locked = state_ == State::Locked;
+    if (locked && just_locked_) {
+      planted_ = foot;
+      if (still) plant_w_ = 1;
+    }
+    plant_w_ += std::clamp((locked && still ? 1.0 : 0.0) - plant_w_, -1.0 / n_, 1.0 / n_);
+    if (plant_w_ > 0) foot = foot.slerp(plant_w_, planted_).normalized();
+  }
+  // The foot joint's world rotation as output this frame (after IK): what stop() and lock_in_place()
+  // plant. Call it every frame after update().
+  void show(const Eigen::Quaterniond& foot) noexcept { shown_foot_ = foot; }
   // Under hold, how far (m per frame, the joint's units) the network's joint may move for a held-off
   // free foot to lock; the pipelines set speed / frame rate. Kept by reset().
   void set_hold_rearm_step(double metres) noexcept { rearm_step_ = metres; }
@@ -82,11 +121,13 @@ class FootLock {
   bool step(bool contact, const Eigen::Vector3d& joint, const Eigen::Vector3d& hip, double max_reach, double max_drift,
               const double* lock_height, Eigen::Vector3d& target) noexcept {
     const bool predicted_contact = contact;
+    const bool was_locked = state_ == State::Locked;
     if (rearm_ == Rearm::NextFrame && !predicted_contact) hold_off_ = false;
     const bool shown = shown_;  // current_ and last_joint_ are last frame's (current_ set below on every path)
     const Eigen::Vector3d prev_joint = last_joint_;
     shown_ = true;
     last_joint_ = joint;
+    just_locked_ = false;
     if (hold_ && state_ == State::Locked && (lock_ - hip).norm() <= max_reach) {
       target = current_ = locked_target();
       return true;
@@ -120,6 +161,7 @@ class FootLock {
         break;
     }
     if (state_ == State::Locked) {
+      just_locked_ = !was_locked;
       target = current_ = locked_target();
       return true;
     }
@@ -131,7 +173,13 @@ class FootLock {
       return true;
     }
     current_ = joint;
+    plant_w_ = 0;  // free: the predicted orientation
     return false;
+  }
+
+  void plant_as_shown() noexcept {
+    planted_ = shown_foot_;
+    plant_w_ = 1;
   }
 
   // The lock; for a foot locked in the air while still (settle_ < n_), eased down to its height.
@@ -150,6 +198,10 @@ class FootLock {
   bool hold_off_ = false, hold_ = false, shown_ = false;  // shown_: current_ and last_joint_ are last frame's
   Eigen::Vector3d lock_ = Eigen::Vector3d::Zero(), from_ = Eigen::Vector3d::Zero(), current_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d last_joint_ = Eigen::Vector3d::Zero();  // the network's joint, last frame
+  bool just_locked_ = false;  // the last update() locked the foot (it was not locked before)
+  Eigen::Quaterniond planted_ = Eigen::Quaterniond::Identity();     // the orientation kept while still
+  Eigen::Quaterniond shown_foot_ = Eigen::Quaterniond::Identity();  // the last output's (show())
+  double plant_w_ = 0;  // how much of planted_ the locked foot keeps (0..1)
 };
 
 }  // namespace sparsebody::pose
