@@ -126,7 +126,7 @@ TEST_CASE("foot lock, direct-mode options: pinned at the joint's own height; Rea
   }
 }
 
-TEST_CASE("foot lock hold: while the user stands still a lock survives contact off and drift, not the reach limit") {
+TEST_CASE("foot lock hold: while the user stands still a lock survives contact off and drift, slides back into reach, not a hip gone away") {
   pose::FootLock lock(10);
   const Vector3d hip(0, 0.9, 0);
   Vector3d target;
@@ -138,6 +138,17 @@ TEST_CASE("foot lock hold: while the user stands still a lock survives contact o
     CHECK(target.isApprox(Vector3d(0.1, 0.042, 0.2)));
   }
   CHECK(lock.state() == pose::FootLock::State::Locked);
+  // a hip that moves 2 cm away with the lock at full stretch: the lock slides after it on the floor,
+  // just back into reach, and stays locked (it was released to the network's toe)
+  const Vector3d lock0 = target;
+  const double reach = (lock0 - hip).norm();
+  const Vector3d hip2 = hip - 0.02 * Vector3d(0.1, 0, 0.2).normalized();
+  REQUIRE(lock.update(true, Vector3d(0.5, 0.05, 0.2), hip2, reach, 0.1, 0.042, target));
+  CHECK(lock.state() == pose::FootLock::State::Locked);
+  CHECK((target - hip2).norm() <= reach);
+  CHECK((target - hip2).norm() == doctest::Approx(reach));
+  CHECK(target.y() == doctest::Approx(0.042));
+  CHECK((target - lock0).norm() == doctest::Approx(0.02).epsilon(0.05));
   // a hip that walked away: the reach limit still releases it (blend towards the network's toe)
   REQUIRE(lock.update(true, Vector3d(1.6, 0.05, 0.2), Vector3d(1.5, 0.9, 0), 1.0, 0.1, 0.042, target));
   CHECK(lock.state() == pose::FootLock::State::Blending);

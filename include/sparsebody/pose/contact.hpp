@@ -13,8 +13,9 @@
 // until the contact flag has gone off once. Rearm says whether the release frame's own "off"
 // counts (SameFrame, LoBSTr) or only a later one does (NextFrame, Neural3Points).
 // hold(true) (the user stands still, trackers/stillness.hpp): a locked foot stays locked whatever
-// the contact flag or the drift says (only the reach limit still releases it), so the avatar's feet
-// do not creep while the user stands; the pipeline clears it on the first moving frame. Under hold
+// the contact flag or the drift says, so the avatar's feet do not creep while the user stands; a
+// lock the hip has left out of reach slides back into reach on the floor (at most 20 cm per frame,
+// else it is released). The pipeline clears the hold on the first moving frame. Under hold
 // a free foot in contact that the network moves less than `hold_rearm_step` per frame locks even
 // when held off (a drift release while walking otherwise left it following the network's creep
 // for the whole stand: 30 % of the feet in offdist's csv stands); a foot the network still moves
@@ -128,9 +129,12 @@ class FootLock {
     shown_ = true;
     last_joint_ = joint;
     just_locked_ = false;
-    if (hold_ && state_ == State::Locked && (lock_ - hip).norm() <= max_reach) {
-      target = current_ = locked_target();
-      return true;
+    if (hold_ && state_ == State::Locked) {
+      if (!((lock_ - hip).norm() <= max_reach)) slide_into_reach(hip, max_reach);
+      if ((lock_ - hip).norm() <= max_reach) {
+        target = current_ = locked_target();
+        return true;
+      }
     }
     if (state_ == State::Locked && ((lock_ - hip).norm() > max_reach || (lock_ - joint).norm() > max_drift)) {
       contact = false;
@@ -175,6 +179,26 @@ class FootLock {
     current_ = joint;
     plant_w_ = 0;  // free: the predicted orientation
     return false;
+  }
+
+  // Under hold, a lock the hip has left out of reach moves towards the hip on the floor, its height
+  // kept, just back into reach (the foot slides as far as the hip moved) instead of being released
+  // to the network's foot. At a stop the network's hips walk on for a few frames; a trailing foot
+  // locked at full stretch was released by a 1 cm hip move and blended to the network's foot, up
+  // to 2.5 m/s in offdist's csv stands. A slide longer than kHoldSlideStep (a hip that jumped or
+  // walked away), or a lock below or above the hip by more than the reach, stays out of reach
+  // (released). The bound: after a stop from a run the anchored hips settle 5-20 cm a frame for a
+  // frame or two (offdist csv, Neural3Points: feet while still 0.94 cm/s with 20 cm, 1.10 with 5 cm).
+  static constexpr double kHoldSlideStep = 0.2;  // m per frame (6 m/s at 30 Hz)
+  void slide_into_reach(const Eigen::Vector3d& hip, double max_reach) noexcept {
+    const double dy = lock_.y() - hip.y();
+    const Eigen::Vector2d h(lock_.x() - hip.x(), lock_.z() - hip.z());
+    const double r2 = max_reach * max_reach - dy * dy, n = h.norm();
+    if (!(r2 > 0) || !(n > 0)) return;
+    const double r = std::sqrt(r2) * (1 - 1e-9);
+    if (!(n - r <= kHoldSlideStep)) return;
+    const Eigen::Vector2d p = h * (r / n);
+    lock_.x() = hip.x() + p.x(), lock_.z() = hip.z() + p.y();
   }
 
   void plant_as_shown() noexcept {
