@@ -138,17 +138,30 @@ TEST_CASE("foot lock hold: while the user stands still a lock survives contact o
     CHECK(target.isApprox(Vector3d(0.1, 0.042, 0.2)));
   }
   CHECK(lock.state() == pose::FootLock::State::Locked);
-  // a hip that moves 2 cm away with the lock at full stretch: the lock slides after it on the floor,
-  // just back into reach, and stays locked (it was released to the network's toe)
+  // a hip that moves away with the lock at full stretch: the lock (put at 0.042, caught at 0.05)
+  // first rises back towards 0.05, then slides after the hip on the floor, just back into reach,
+  // and stays locked (it was released to the network's toe)
   const Vector3d lock0 = target;
   const double reach = (lock0 - hip).norm();
-  const Vector3d hip2 = hip - 0.02 * Vector3d(0.1, 0, 0.2).normalized();
+  const Vector3d away = Vector3d(0.1, 0, 0.2).normalized();
+  const Vector3d hip2 = hip - 0.002 * away;  // a little: rising is enough
   REQUIRE(lock.update(true, Vector3d(0.5, 0.05, 0.2), hip2, reach, 0.1, 0.042, target));
   CHECK(lock.state() == pose::FootLock::State::Locked);
-  CHECK((target - hip2).norm() <= reach);
   CHECK((target - hip2).norm() == doctest::Approx(reach));
-  CHECK(target.y() == doctest::Approx(0.042));
-  CHECK((target - lock0).norm() == doctest::Approx(0.02).epsilon(0.05));
+  CHECK(target.y() > 0.042 + 1e-4);
+  CHECK(target.y() < 0.05);
+  CHECK(target.x() == doctest::Approx(0.1));
+  CHECK(target.z() == doctest::Approx(0.2));
+  // 5 cm (the near-vertical leg gets 2.5 cm of horizontal reach back from the 8 mm rise): it rises
+  // to 0.05 and slides the other ~2 cm
+  const Vector3d hip3 = hip - 0.05 * away;
+  REQUIRE(lock.update(true, Vector3d(0.5, 0.05, 0.2), hip3, reach, 0.1, 0.042, target));
+  CHECK(lock.state() == pose::FootLock::State::Locked);
+  CHECK((target - hip3).norm() <= reach);
+  CHECK((target - hip3).norm() == doctest::Approx(reach));
+  CHECK(target.y() == doctest::Approx(0.05));
+  CHECK((target - lock0).norm() < 0.03);
+  CHECK((target - lock0).norm() > 0.015);
   // a hip that walked away: the reach limit still releases it (blend towards the network's toe)
   REQUIRE(lock.update(true, Vector3d(1.6, 0.05, 0.2), Vector3d(1.5, 0.9, 0), 1.0, 0.1, 0.042, target));
   CHECK(lock.state() == pose::FootLock::State::Blending);
@@ -437,4 +450,59 @@ TEST_CASE("foot lock: a held foot keeps its planted orientation while still") {
   d.stop(&h);
   CHECK(d.state() == pose::FootLock::State::Free);
   CHECK_FALSE(d.update(false, toe, hip, 1.0, 0.1, 0.042, target));
+}
+
+// An own-height lock (direct mode's ankle) made at a stop puts a foot caught in the air down to the
+// height of its last walking contact, as far as the leg reaches (it rises no higher than it was
+// caught); x and z stay where it was shown.
+TEST_CASE("foot lock: a foot caught in the air by a stop is put down to its walking contact height, within reach") {
+  Vector3d target;
+  const Vector3d hip(0, 0.9, 0);
+  auto walk_then_swing = [&](pose::FootLock& l) {
+    REQUIRE(l.update(true, Vector3d(0.1, 0.08, 0.1), hip, 1.0, 0.3, target));  // walking contact: ankle at 0.08
+    for (int i = 0; i < 12; ++i) l.update(false, Vector3d(0.1, 0.08 + 0.01 * i, 0.1 + 0.02 * i), hip, 1.0, 0.3, target);
+    REQUIRE(l.state() == pose::FootLock::State::Free);  // swinging, shown at y 0.19, z 0.32
+  };
+  pose::FootLock a(8, pose::FootLock::Rearm::NextFrame);
+  walk_then_swing(a);
+  a.hold(true);
+  a.stop();
+  double y_prev = 1;
+  for (int i = 0; i < 10; ++i) {
+    a.hold(true);
+    REQUIRE(a.update(false, Vector3d(0.5, 0.3, 0.5), hip, 1.0, 0.3, target));
+    CHECK(target.y() <= y_prev + 1e-12);
+    CHECK(target.z() == doctest::Approx(0.32));
+    y_prev = target.y();
+  }
+  CHECK(target.y() == doctest::Approx(0.08));
+  // the hip higher: the leg (reach 0.98 m) cannot reach 0.08 m under (0.1, 0.32): the lock comes
+  // down only to the reach sphere, x and z kept
+  pose::FootLock b(8, pose::FootLock::Rearm::NextFrame);
+  walk_then_swing(b);
+  b.hold(true);
+  b.stop();
+  const Vector3d high_hip(0, 1.05, 0);
+  const double reach = 0.98;
+  for (int i = 0; i < 10; ++i) {
+    b.hold(true);
+    REQUIRE(b.update(false, Vector3d(0.5, 0.3, 0.5), high_hip, reach, 0.3, target));
+    CHECK((target - high_hip).norm() <= reach + 1e-9);
+  }
+  CHECK(b.state() == pose::FootLock::State::Locked);
+  CHECK(target.x() == doctest::Approx(0.1));
+  CHECK(target.z() == doctest::Approx(0.32));
+  CHECK(target.y() > 0.08 + 1e-3);
+  CHECK(target.y() < 0.19);
+  CHECK((target - high_hip).norm() == doctest::Approx(reach));
+  // a foot never in walking contact keeps its own height
+  pose::FootLock c(8, pose::FootLock::Rearm::NextFrame);
+  c.update(false, Vector3d(0.1, 0.19, 0.1), hip, 1.0, 0.3, target);
+  c.hold(true);
+  c.stop();
+  for (int i = 0; i < 10; ++i) {
+    c.hold(true);
+    c.update(false, Vector3d(0.5, 0.3, 0.5), hip, 1.0, 0.3, target);
+  }
+  CHECK(target.y() == doctest::Approx(0.19));
 }

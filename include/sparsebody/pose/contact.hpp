@@ -31,6 +31,7 @@
 #include <algorithm>
 #include <cmath>
 #include <initializer_list>
+#include <limits>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -49,6 +50,7 @@ class FootLock {
     hold_off_ = hold_ = shown_ = just_locked_ = false;
     settle_ = n_;
     plant_w_ = 0;
+    contact_y_ = std::numeric_limits<double>::infinity();
   }
   void hold(bool h) noexcept { hold_ = h; }
   // The world's scale changed by k (a new calibration: positions are in the standard skeleton's
@@ -58,7 +60,10 @@ class FootLock {
   }
   State state() const noexcept { return state_; }
   // Lock now where the foot was last shown, moved with the ground (x and z x k), easing to
-  // `lock_height` (nullptr: keeps its height); a foot never shown resets. For the two moments the
+  // `lock_height` (nullptr: its own height, or the height of its last walking contact where that is
+  // lower, as far as the leg reaches: a swing foot caught in the air is put down; in offdist's
+  // csvstop stands 19 % of Neural3Points' toe frames were more than 6 cm up, 8.5 % now); a foot
+  // never shown resets. For the two moments the
   // network's foot must not be followed: it restarted while the user stands (a calibration changed
   // the body's size by k: its first pose is a default stance, and free feet snapped to it, up to
   // 24 cm in one frame in offdist's csv), and the user just stopped dead (trackers::Stillness's
@@ -69,11 +74,14 @@ class FootLock {
     Eigen::Vector3d p = current_;
     p.x() *= k, p.z() *= k;
     const bool hold = hold_;  // as the caller set it for this frame
+    const double contact_y = contact_y_;
     reset();
     hold_ = hold;
+    contact_y_ = contact_y;
     state_ = State::Locked;
     from_ = lock_ = current_ = last_joint_ = p;
-    if (lock_height) lock_.y() = *lock_height;
+    lock_.y() = lock_height ? *lock_height : std::min(p.y(), contact_y_);
+    caught_y_ = p.y();
     settle_ = 0;
     shown_ = true;
     plant_as_shown();
@@ -154,6 +162,9 @@ class FootLock {
           from_ = hold_ && shown ? current_ : joint;
           lock_ = from_;
           if (lock_height) lock_.y() = *lock_height;
+          else if (hold_) lock_.y() = std::min(lock_.y(), contact_y_);  // put down, as lock_in_place
+          else contact_y_ = lock_.y();  // a walking contact: the joint's height on the floor
+          caught_y_ = from_.y();
           settle_ = hold_ ? 0 : n_;
         }
         break;
@@ -161,7 +172,7 @@ class FootLock {
         if (!contact) { state_ = State::Blending; from_ = lock_; k_ = 0; }
         break;
       case State::Blending:
-        if (contact) { state_ = State::Locked; lock_ = current_; settle_ = n_; }
+        if (contact) { state_ = State::Locked; lock_ = current_; caught_y_ = lock_.y(); settle_ = n_; }
         break;
     }
     if (state_ == State::Locked) {
@@ -190,7 +201,14 @@ class FootLock {
   // (released). The bound: after a stop from a run the anchored hips settle 5-20 cm a frame for a
   // frame or two (offdist csv, Neural3Points: feet while still 0.94 cm/s with 20 cm, 1.10 with 5 cm).
   static constexpr double kHoldSlideStep = 0.2;  // m per frame (6 m/s at 30 Hz)
+  // A lock put below the height it was caught at first rises as far as the leg needs, no higher.
   void slide_into_reach(const Eigen::Vector3d& hip, double max_reach) noexcept {
+    if (lock_.y() < caught_y_) {
+      const double h2 = (Eigen::Vector2d(lock_.x() - hip.x(), lock_.z() - hip.z())).squaredNorm();
+      const double r2v = max_reach * max_reach - h2;
+      if (r2v > 0) lock_.y() = std::clamp(hip.y() - std::sqrt(r2v) * (1 - 1e-9), lock_.y(), caught_y_);
+      if ((lock_ - hip).norm() <= max_reach) return;
+    }
     const double dy = lock_.y() - hip.y();
     const Eigen::Vector2d h(lock_.x() - hip.x(), lock_.z() - hip.z());
     const double r2 = max_reach * max_reach - dy * dy, n = h.norm();
@@ -223,6 +241,9 @@ class FootLock {
   Eigen::Vector3d lock_ = Eigen::Vector3d::Zero(), from_ = Eigen::Vector3d::Zero(), current_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d last_joint_ = Eigen::Vector3d::Zero();  // the network's joint, last frame
   bool just_locked_ = false;  // the last update() locked the foot (it was not locked before)
+  // height of the joint at its last walking contact (own-height locks); +inf: none yet
+  double contact_y_ = std::numeric_limits<double>::infinity();
+  double caught_y_ = 0;  // the joint's height when the lock was made (a lock put lower may rise back to it)
   Eigen::Quaterniond planted_ = Eigen::Quaterniond::Identity();     // the orientation kept while still
   Eigen::Quaterniond shown_foot_ = Eigen::Quaterniond::Identity();  // the last output's (show())
   double plant_w_ = 0;  // how much of planted_ the locked foot keeps (0..1)
