@@ -374,8 +374,8 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   long long calibration_changes_ = 0;
   pose::JointMap map_;
   // Direct-mode foot pinning (pose::FootLock): the ankle pinned where contact began (its own
-  // height), released over 8 frames; a pin released for distance needs the contact to go off on a
-  // later frame before it pins again.
+  // height; a foot caught in the air by a stop is put down), released over 8 frames; a pin released
+  // for distance needs the contact to go off on a later frame before it pins again.
   pose::FootLock lock_[2] = {pose::FootLock(8, pose::FootLock::Rearm::NextFrame),
                              pose::FootLock(8, pose::FootLock::Rearm::NextFrame)};
   trackers::Stillness still_;

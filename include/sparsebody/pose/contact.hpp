@@ -63,8 +63,8 @@ class FootLock {
   // `lock_height` (nullptr: its own height, or the height of its last walking contact where that is
   // lower, as far as the leg reaches: a swing foot caught in the air is put down; in offdist's
   // csvstop stands 19 % of Neural3Points' toe frames were more than 6 cm up, 8.5 % now); a foot
-  // never shown resets. For the two moments the
-  // network's foot must not be followed: it restarted while the user stands (a calibration changed
+  // never shown resets. For the two moments the network's foot must not be followed: it
+  // restarted while the user stands (a calibration changed
   // the body's size by k: its first pose is a default stance, and free feet snapped to it, up to
   // 24 cm in one frame in offdist's csv), and the user just stopped dead (trackers::Stillness's
   // stop test, k = 1: the network walks on for a step or so).
