@@ -1,6 +1,6 @@
 // Zero heap allocations per frame: the pipeline (the shared front end's resampler, sanitizer and
-// output pose, calibration, predictor, direct-mode IK) over clean frames, HMD-only frames and
-// bad input.
+// output pose, calibration, predictor, direct-mode IK, head height) over clean frames, HMD-only
+// frames, a headset far below and above the body, and bad input.
 #include <doctest/doctest.h>
 
 #include "n3p/common.hpp"
@@ -30,6 +30,10 @@ TEST_CASE("n3p pipeline: no allocation per frame") {
     for (std::size_t t = 3; t < frames.size(); ++t) {
       trackers::TrackerFrame f = frames[t];
       f.time += 0.004;  // off the 30 Hz grid: the resampler interpolates
+      // frames 40-59 kneeling, 60-79 on a platform: head_height moves the body down (the legs
+      // bent to the ankles) and up
+      const float dy = t >= 40 && t < 60 ? -0.8f : t >= 60 && t < 80 ? 0.8f : 0.0f;
+      for (auto& pose : f.pose) pose.position.y += dy;
       // frames 30-31 under a NaN calibration scale: the predictor rejects them, the last pose stays
       if (t == 30) p.set_calibration(nan_scale);
       if (t == 32) p.set_calibration(features::n3p::N3PCalibration{});

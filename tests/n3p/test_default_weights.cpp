@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "n3p/common.hpp"
 #include "support/standing_stream.hpp"
@@ -114,4 +115,51 @@ TEST_CASE("n3p default weights: feet stay put and the head on the headset while 
   // this stand creeps only 0.15 cm/s (0.45 before); the hold still does better (0.13).
   CHECK(held < free);
   CHECK(head_hold < 0.01);
+}
+
+TEST_CASE("n3p default weights: head height: the body walks up onto a platform and kneels with the headset") {
+  using sparsebody_test::Phase;
+  const auto w = Paper::load(prefix());
+  // 2 s standing (eye 1.62 m), 2 s walking, 3 s standing. Up: every tracker rises 0.4 m over the
+  // walk (a ramp onto a platform). Down: every tracker sinks 0.6 m over the last stand's first
+  // 0.5 s (kneeling). Calibrated explicitly on the first frame, so the automatic search does not
+  // resize the body to the new eye height. Measured over the last 2 s.
+  const auto s = sparsebody_test::session({{Phase::Stand, 2.0, 1.62}, {Phase::Walk, 2.0, 1.62}, {Phase::Stand, 3.0, 1.62}}, 72.0,
+                                          0.3, false);
+  auto run = [&](bool follow, bool up, double* toe_y) {
+    avatar::N3PConfig c;
+    c.head_height = follow;
+    Paper p(w, c);
+    REQUIRE(p.calibrate(s.front()));
+    const int toe[2] = {p.joint_map()[pose::Role::ToeL], p.joint_map()[pose::Role::ToeR]};
+    const int head = p.joint_map()[pose::Role::Head];
+    double err = 0;
+    int n = 0;
+    *toe_y = std::numeric_limits<double>::infinity();
+    for (auto f : s) {
+      const double d = up ? 0.4 * std::clamp((f.time - 2.0) / 2.0, 0.0, 1.0) : -0.6 * std::clamp((f.time - 4.0) / 0.5, 0.0, 1.0);
+      for (auto& pose : f.pose) pose.position.y += static_cast<float>(d);
+      if (p.push(f) == 0 || !p.has_output() || f.time < 5.0) continue;
+      err += std::abs(p.world().position[head].y() - p.trackers()[0].p.y()) * p.user_scale();
+      for (int k = 0; k < 2; ++k) *toe_y = std::min(*toe_y, p.world().position[toe[k]].y() * p.user_scale());
+      ++n;
+    }
+    REQUIRE(n > 40);
+    return err / n;
+  };
+  double toe_on = 0, toe_off = 0;
+  const double up_on = run(true, true, &toe_on), up_off = run(false, true, &toe_off);
+  MESSAGE("0.4 m up: head " << 100 * up_on << " cm from the headset (" << 100 * up_off << " cm without head_height), lowest toe "
+                             << 100 * toe_on << " cm (" << 100 * toe_off << ")");
+  CHECK(up_off > 0.25);
+  // the dead band (3 cm, standard scale) and the pinned legs' 2 % reserve: standing on the
+  // platform the feet stay pinned, and the network's legs are nearly straight already
+  CHECK(up_on < 0.06);
+  CHECK(toe_on > 0.25);  // the feet came up with the body (pins made on the platform)
+  const double down_on = run(true, false, &toe_on), down_off = run(false, false, &toe_off);
+  MESSAGE("0.6 m down: head " << 100 * down_on << " cm from the headset (" << 100 * down_off << " cm without head_height), lowest toe "
+                               << 100 * toe_on << " cm (" << 100 * toe_off << ")");
+  CHECK(down_off > 0.1);
+  CHECK(down_on < 0.04);
+  CHECK(toe_on > -0.02);  // the legs bend: the feet are not pushed into the floor
 }

@@ -3,6 +3,7 @@
 // and bad input (NaN, lost trackers, gaps, jumps): defined behaviour, never a NaN out.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -27,7 +28,7 @@ bool finite(const n3p_test::SmallPipeline& p) {
 avatar::N3PConfig no_ik() {
   avatar::N3PConfig c;
   c.foot_ik = c.hand_ik = false;
-  c.anchor_head = c.head_reach = false;  // the predictor's own output: no post-processing at all
+  c.anchor_head = c.head_reach = c.head_height = false;  // the predictor's own output: no post-processing at all
   return c;
 }
 }  // namespace
@@ -60,6 +61,52 @@ TEST_CASE("n3p pipeline: the head anchor keeps the predicted head on the headset
   MESSAGE("mean horizontal head error: anchored " << on << " m, free " << off << " m");
   CHECK(on < 0.75 * off);  // (a small random-weight network here: it strays metres; the default weights stray cm)
   CHECK(step_on < step_off + 0.03 + 1e-9);  // the anchor moves the body by at most anchor_max_step per step
+}
+
+TEST_CASE("n3p pipeline: head height: the body follows a headset above or below where it can put its head") {
+  const auto& g = golden();
+  const int frames = std::min(120, g["frames"].get<int>());
+  // The user steps onto a 0.5 m platform (every tracker rises, 5 cm a frame from frame 20), or
+  // kneels (every tracker 0.5 m lower). Head error: |headset y - head joint y| over frames 50..
+  auto run = [&](bool follow, double rise, double* head_err, double* lowest_ankle, double* lowest_before) {
+    avatar::N3PConfig c;
+    c.head_height = follow;
+    n3p_test::SmallPipeline p(weights(), c);
+    p.set_calibration({});
+    const int head = p.skeleton().find("Head");
+    const int ankle[2] = {p.skeleton().find("Foot_L"), p.skeleton().find("Foot_R")};
+    double sum = 0;
+    int n = 0;
+    *lowest_ankle = *lowest_before = std::numeric_limits<double>::infinity();
+    for (int t = 0; t < frames; ++t) {
+      auto f = n3p_test::golden_frame(g, t);
+      const double dy = rise * std::clamp((t - 20) / 10.0, 0.0, 1.0);
+      for (int k = 0; k < 3; ++k) f.pose[k].position.y += static_cast<float>(dy);
+      REQUIRE(p.push(f) == 1);
+      REQUIRE(finite(p));
+      const double low = std::min(p.world().position[ankle[0]].y(), p.world().position[ankle[1]].y());
+      if (t < 20) *lowest_before = std::min(*lowest_before, low);
+      else *lowest_ankle = std::min(*lowest_ankle, low);
+      if (t >= 50) {
+        sum += std::abs(f.pose[0].position.y - p.world().position[head].y());
+        ++n;
+      }
+    }
+    *head_err = sum / n;
+  };
+  double up_on, up_off, down_on, down_off, low, before, low_off, before_off;
+  run(true, 0.5, &up_on, &low, &before);
+  run(false, 0.5, &up_off, &low_off, &before_off);
+  MESSAGE("0.5 m up: mean vertical head error " << up_on << " m following, " << up_off << " m not");
+  CHECK(up_off > 0.3);
+  CHECK(up_on < 0.03 + 0.01);  // the dead band, and pins released once the headset is out of their reach
+  run(true, -0.5, &down_on, &low, &before);
+  run(false, -0.5, &down_off, &low_off, &before_off);
+  MESSAGE("0.5 m down: mean vertical head error " << down_on << " m following, " << down_off << " m not; lowest ankle "
+                                                 << low << " m (before: " << before << " m), not following " << low_off << " m");
+  CHECK(down_off > 0.3);
+  CHECK(down_on < 0.03 + 0.01);
+  CHECK(low > before - 0.02);  // the legs bend: the feet are not pushed into the floor
 }
 
 TEST_CASE("n3p pipeline: without IK it reproduces the PyTorch reference, controller flags -> modes") {

@@ -39,6 +39,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "sparsebody/avatar/pipeline_front_end.hpp"
@@ -93,6 +94,20 @@ struct N3PConfig {
   // the avatar's head. Before the hands' IK, so the arms follow the chest.
   bool head_reach = true;
   pose::ChainReachConfig spine{};
+  // Head height: the vertical head error the spine's reach leaves, beyond a dead band, moves the
+  // whole body. The predictor keeps its hips about 1 m up whatever the headset does: on the CMU
+  // clips a climb left the head 40-50 cm below the headset and a kneel 40 cm above it.
+  // - Down (a crouch, kneeling, sitting on the floor): the ankles stay where they were and the
+  //   legs bend.
+  // - Up (a jump, a step up, tiptoes): only as far as the pinned feet's legs reach; a headset
+  //   more than `head_height_release` above that lifts them off. Lifting them at any excess
+  //   released the pins of standing performers whose head was 5-9 cm above the predicted one,
+  //   and their feet slid.
+  // Output only: the predictor's state is untouched. Off in physics mode's reference.
+  bool head_height = true;
+  double head_height_band = 0.03;     // m, standard scale: a smaller error is left to the pose
+  double head_height_release = 0.15;  // m beyond the pinned legs' reach: a jump or a step up
+  double head_height_max_step = 0.15; // m per step (4.5 m/s at 30 Hz); more catches up over frames
   trackers::SanitizerConfig sanitizer{};
   features::DeviceModel devices{};                // device -> joint offsets (DeviceModel::none(): trackers at the joints)
   features::AutoCalibrationConfig calibration{};  // the standing-window search (enabled by default)
@@ -218,6 +233,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
         reset_state();
       } else {
         pred_.rescale_ground(k);
+        lift_ *= k;
         lock_[0].rescale(k);
         lock_[1].rescale(k);
       }
@@ -264,6 +280,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       spine_.solve(pred_.skeleton(), out_.pose(), out_.world(), o[0].p, cfg_.spine);
       pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
     }
+    if (cfg_.head_height && head_ >= 0) follow_head_height(o[0].p.y());
     if (cfg_.foot_ik) pin_feet();
     if (cfg_.hand_ik)
       for (int side = 0; side < 2; ++side)
@@ -312,6 +329,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   using Base::stream_;
 
   void reset_state() noexcept {
+    lift_ = 0.0;
     pred_.reset();
     lock_[0].reset();
     lock_[1].reset();
@@ -330,6 +348,45 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     out.position = p;
     out.orientation = Eigen::Quaterniond(q.coeffs() / n);
     return true;
+  }
+
+  // N3PConfig::head_height: the body moves vertically by the head error beyond the dead band.
+  // Going down, each ankle is put back where it was (the legs bend; an ankle the lowered hip
+  // cannot reach stretches towards it); going up, the feet go with the body and pin_feet()
+  // stretches the legs to their pins or releases them.
+  void follow_head_height(double headset_y) noexcept {
+    const double e = headset_y - out_.world().position[head_].y();
+    const double band = cfg_.head_height_band;
+    double want = !std::isfinite(e) ? 0.0 : e > band ? e - band : e < -band ? e + band : 0.0;
+    if (want > 0.0) {  // up: as far as the pinned legs reach; a head higher by `release` lifts them
+      const double m = pinned_lift();
+      want = std::min(want, m) + std::max(0.0, want - m - cfg_.head_height_release);
+    }
+    // the lift changes by at most max_step a frame (the pose under it is the network's each frame)
+    const double dy = std::clamp(want, lift_ - cfg_.head_height_max_step, lift_ + cfg_.head_height_max_step);
+    lift_ = dy;
+    if (dy == 0.0) return;
+    Eigen::Vector3d ankle[2];
+    for (int side = 0; side < 2; ++side) ankle[side] = out_.world().position[leg_[side][2]];
+    out_.pose().root_position.y() += dy;
+    for (auto& p : out_.world().position) p.y() += dy;
+    if (dy > 0.0) return;
+    for (int side = 0; side < 2; ++side) put_limb(leg_[side], ankle[side]);
+    pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
+  }
+
+  // How far the body can rise with every pinned ankle within 98 % of its leg's reach (+inf: none
+  // pinned). At 100 % rounding released the pin a frame later, and the foot slid as it blended
+  // to the network's (offdist devices, standing clips: foot skating 0.7 -> 4-10 cm/s).
+  double pinned_lift() const noexcept {
+    double m = std::numeric_limits<double>::infinity();
+    for (int side = 0; side < 2; ++side) {
+      if (lock_[side].state() != pose::FootLock::State::Locked) continue;
+      const Eigen::Vector3d d = out_.world().position[leg_[side][0]] - lock_[side].lock_position();  // hip - pin
+      const double r = 0.98 * reach_[side], h2 = d.x() * d.x() + d.z() * d.z();
+      m = std::min(m, h2 < r * r ? std::max(0.0, std::sqrt(r * r - h2) - d.y()) : 0.0);
+    }
+    return m;
   }
 
   // Feet in contact stay where contact began (lock_), the leg bent to reach them. While the user
@@ -385,6 +442,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   int head_ = -1;
   pose::ChainReach spine_;
   double reach_[2] = {};
+  double lift_ = 0.0;  // the vertical offset follow_head_height() gave the last frame (m, standard scale)
 };
 
 // The shipped configuration, by name: the paper's sizes (G_sig / G_lo / G_up hidden 64 / 128 / 128:

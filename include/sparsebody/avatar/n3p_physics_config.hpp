@@ -13,8 +13,17 @@ namespace sparsebody::avatar {
 // predictor and a learned policy pi (control/n3p_control_predictor.hpp), when policy weights are given.
 enum class ControllerKind : unsigned char { ModelBased, Policy };
 
+// The reference's direct-mode settings: N3PConfig's, without head_height (a reference lifted off
+// its feet by a headset higher than the body reaches would ask the simulated avatar to float; the
+// physics figures were measured without it).
+inline N3PConfig physics_reference_config() noexcept {
+  N3PConfig c;
+  c.head_height = false;
+  return c;
+}
+
 struct N3PPhysicsConfig {
-  N3PConfig direct{};                           // the reference: direct mode (foot pinning + arm IK)
+  N3PConfig direct = physics_reference_config();  // the reference: direct mode (foot pinning + arm IK)
   character::AvatarOptions avatar{};            // 1.75 m, 63 kg, kp 200, kd 20 (paper §7)
   control::ModelBasedControllerConfig controller{};  // ControllerKind::ModelBased only
   control::TrackerCorrectionConfig correction{};  // kp 1000, kd 10 (§6.2)

@@ -59,6 +59,8 @@ class FootLock {
     for (Eigen::Vector3d* p : {&lock_, &from_, &current_, &last_joint_}) p->x() *= k, p->z() *= k;
   }
   State state() const noexcept { return state_; }
+  // Where the joint is locked (meaningful while state() is Locked; before the height easing).
+  const Eigen::Vector3d& lock_position() const noexcept { return lock_; }
   // Lock now where the foot was last shown, moved with the ground (x and z x k), easing to
   // `lock_height` (nullptr: its own height, or the height of its last walking contact where that is
   // lower, as far as the leg reaches: a swing foot caught in the air is put down; in offdist's
