@@ -3,9 +3,10 @@
 // prints MPJPE full / upper / lower (cm), and foot skating (cm/s, toes, ground-truth contact
 // frames), for 3-point and HMD-only input. The input file is made of the data: keep it outside the
 // repository.
-//   eval_direct FILE.json [WEIGHTS_PREFIX] [--storage float|f16|q8]
+//   eval_direct FILE.json [WEIGHTS_PREFIX] [--storage float|f16|q8] [--no-head-height]
 // --storage picks the weight storage of the networks (float; nn/half.hpp f16; nn/int8.hpp q8), to
-// measure what the smaller storage costs in accuracy.
+// measure what the smaller storage costs in accuracy. --no-head-height turns N3PConfig::head_height
+// off (the figures before it).
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -20,12 +21,13 @@
 using namespace sparsebody;
 
 template <class Pipeline>
-int evaluate(const nlohmann::json& d, const std::string& prefix, const char* storage) {
+int evaluate(const nlohmann::json& d, const std::string& prefix, const char* storage, bool head_height) {
   const auto w = Pipeline::load(prefix);
   const std::vector<int> upper = d["upper"], lower = d["lower"], toes = d["toes"];
   for (int hmd = 0; hmd < 2; ++hmd) {
     avatar::N3PConfig cfg;
     cfg.use_controllers = hmd == 0;
+    cfg.head_height = head_height;
     double e = 0, eu = 0, el = 0, skate = 0;
     long n = 0, ns = 0;
     for (const auto& c : d["clips"]) {
@@ -69,19 +71,21 @@ int evaluate(const nlohmann::json& d, const std::string& prefix, const char* sto
 int main(int argc, char** argv) {
   std::string file, prefix = std::string(SPARSEBODY_SOURCE_DIR) + "/examples/weights/n3p", storage = "float";
   int positional = 0;
+  bool head_height = true;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--storage" && i + 1 < argc) storage = argv[++i];
+    else if (a == "--no-head-height") head_height = false;
     else if (positional++ == 0) file = a;
     else prefix = a;
   }
   if (file.empty() || (storage != "float" && storage != "f16" && storage != "q8")) {
-    std::fprintf(stderr, "usage: eval_direct FILE.json [WEIGHTS_PREFIX] [--storage float|f16|q8]\n");
+    std::fprintf(stderr, "usage: eval_direct FILE.json [WEIGHTS_PREFIX] [--storage float|f16|q8] [--no-head-height]\n");
     return 2;
   }
   std::ifstream in(file);
   const auto d = nlohmann::json::parse(in);
-  if (storage == "f16") return evaluate<avatar::N3PDirectF16>(d, prefix, "f16");
-  if (storage == "q8") return evaluate<avatar::N3PDirectQ8>(d, prefix, "q8");
-  return evaluate<avatar::N3PDirect>(d, prefix, "float");
+  if (storage == "f16") return evaluate<avatar::N3PDirectF16>(d, prefix, "f16", head_height);
+  if (storage == "q8") return evaluate<avatar::N3PDirectQ8>(d, prefix, "q8", head_height);
+  return evaluate<avatar::N3PDirect>(d, prefix, "float", head_height);
 }
