@@ -5,6 +5,9 @@
 //     -> N3PCalibration (device -> head / wrist joints, height scale, §7; found automatically from
 //        standing windows by default, features/auto_calibration.hpp)
 //     -> N3PPredictor (Eq. (2): G_sig -> G_lo -> heading update -> G_up; o* for missing controllers)
+//     -> the body under the headset (ours, not the paper's): moved horizontally towards it (head
+//        anchor), the spine bent to reach it (head reach), then moved vertically by what is left
+//        (head height: crouching, kneeling, stepping up, jumping)
 //     -> direct-mode IK (§7, "to enforce foot contacts and achieve accurate tracker positions"):
 //        feet in contact (c > threshold) are pinned at the ankle (pose::FootLock, below) with
 //        two-bone leg IK;
