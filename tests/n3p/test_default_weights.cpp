@@ -163,3 +163,37 @@ TEST_CASE("n3p default weights: head height: the body walks up onto a platform a
   CHECK(down_on < 0.03);
   CHECK(toe_on > -0.02);  // the legs bend: the feet are not pushed into the floor
 }
+
+TEST_CASE("n3p default weights: head height: a jump takes the feet off the floor at once, and they land") {
+  using sparsebody_test::Phase;
+  const auto w = Paper::load(prefix());
+  const auto s = sparsebody_test::session({{Phase::Stand, 4.0, 1.62}}, 72.0, 0.3, false);
+  // a 25 cm jump at 2 s: every tracker up and down in 0.45 s
+  auto run = [&](double jump_speed, double* worst_in_air, double* toe_after) {
+    avatar::N3PConfig c;
+    c.head_height_jump_speed = jump_speed;
+    Paper p(w, c);
+    REQUIRE(p.calibrate(s.front()));
+    const int toe[2] = {p.joint_map()[pose::Role::ToeL], p.joint_map()[pose::Role::ToeR]};
+    const int head = p.joint_map()[pose::Role::Head];
+    *worst_in_air = *toe_after = 0;
+    for (auto f : s) {
+      const double t = f.time - 2.0, T = 0.45;
+      const double d = t > 0 && t < T ? 0.25 * std::sin(M_PI * t / T) : 0.0;
+      for (auto& pose : f.pose) pose.position.y += static_cast<float>(d);
+      if (p.push(f) == 0 || !p.has_output()) continue;
+      const double err = std::abs(p.trackers()[0].p.y() - p.world().position[head].y()) * p.user_scale();
+      if (t > 0.07 && t < T) *worst_in_air = std::max(*worst_in_air, err);  // from the third frame of the jump
+      if (t > T + 0.3)
+        for (int k = 0; k < 2; ++k) *toe_after = std::max(*toe_after, p.world().position[toe[k]].y() * p.user_scale());
+    }
+  };
+  double air = 0, after = 0, air_slow = 0, after_slow = 0;
+  run(avatar::N3PConfig{}.head_height_jump_speed, &air, &after);  // the default: 1.2 m/s
+  run(std::numeric_limits<double>::infinity(), &air_slow, &after_slow);
+  MESSAGE("25 cm jump: head at most " << 100 * air << " cm from the headset in the air (" << 100 * air_slow
+                                      << " cm lifting only beyond the release height); highest toe after landing " << 100 * after << " cm");
+  CHECK(air < 0.03);        // the band (2 cm, standard scale) and a little
+  CHECK(air_slow > 0.1);    // the pins held the body down until the release height
+  CHECK(after < 0.06);      // back on the floor (a standing toe joint is ~4 cm up)
+}

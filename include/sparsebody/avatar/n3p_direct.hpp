@@ -113,6 +113,11 @@ struct N3PConfig {
   // 2.26 cm, but 1 cm moves the standing feet of csv sessions 0.94 -> 1.06 cm/s.
   double head_height_band = 0.02;
   double head_height_release = 0.15;  // m beyond the pinned legs' reach: a jump or a step up
+  // ... or at once, while the headset rises faster than this (m/s, standard scale, over the last 2
+  // frames): a jump's take-off (a 25 cm jump: ~1.7 m/s) rather than tiptoes or a stretch. Without
+  // it that jump left the head up to 19 cm below the headset for its first 0.15 s. 0.8 m/s fired
+  // on validation device sessions (feet while still 0.42 -> 0.46 cm/s); 1.2 never does.
+  double head_height_jump_speed = 1.2;
   double head_height_max_step = 0.15; // m per step (4.5 m/s at 30 Hz); more catches up over frames
   trackers::SanitizerConfig sanitizer{};
   features::DeviceModel devices{};                // device -> joint offsets (DeviceModel::none(): trackers at the joints)
@@ -240,6 +245,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       } else {
         pred_.rescale_ground(k);
         lift_ *= k;
+        headset_y_[0] *= k, headset_y_[1] *= k;  // heights in the standard scale
         lock_[0].rescale(k);
         lock_[1].rescale(k);
       }
@@ -336,6 +342,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
 
   void reset_state() noexcept {
     lift_ = 0.0;
+    headset_y_[0] = headset_y_[1] = std::numeric_limits<double>::quiet_NaN();
     pred_.reset();
     lock_[0].reset();
     lock_[1].reset();
@@ -364,7 +371,13 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     const double e = headset_y - out_.world().position[head_].y();
     const double band = cfg_.head_height_band;
     double want = !std::isfinite(e) ? 0.0 : e > band ? e - band : e < -band ? e + band : 0.0;
-    if (want > 0.0) {  // up: as far as the pinned legs reach; a head higher by `release` lifts them
+    // the headset's rise over the last two frames (m/s); NaN until there are two
+    const double rise = (headset_y - headset_y_[1]) * pred_.meta().frame_rate / 2;
+    headset_y_[1] = headset_y_[0];
+    headset_y_[0] = headset_y;
+    if (want > 0.0 && !(rise > cfg_.head_height_jump_speed)) {
+      // up: as far as the pinned legs reach; a head higher by `release` lifts them (a jump's
+      // take-off lifts them at once)
       const double m = pinned_lift();
       want = std::min(want, m) + std::max(0.0, want - m - cfg_.head_height_release);
     }
@@ -449,6 +462,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   pose::ChainReach spine_;
   double reach_[2] = {};
   double lift_ = 0.0;  // the vertical offset follow_head_height() gave the last frame (m, standard scale)
+  double headset_y_[2] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};  // last 2 frames'
 };
 
 // The shipped configuration, by name: the paper's sizes (G_sig / G_lo / G_up hidden 64 / 128 / 128:
