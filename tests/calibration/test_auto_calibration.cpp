@@ -160,6 +160,81 @@ TEST_CASE("auto calibration: a short first stand gives a provisional estimate th
   CHECK(std::string(f.r().message).find("automatic: standing at") == 0);
 }
 
+TEST_CASE("auto calibration: a bent stand is raised when the headset then stays above it (AutoCalibration::rise)") {
+  // a crouched, still start (every stillness test passes at 1.50 m), then walking upright at 1.65 m
+  const auto s = sparsebody_test::session({{Phase::Stand, 2.0, 1.50}, {Phase::Walk, 3.0, 1.65}});
+  Feeder f;
+  std::size_t i = 0;
+  for (; s[i].time < 2.1; ++i) f.feed(s[i]);  // the stand's window closes as the walk begins
+  REQUIRE(f.r().status == features::CalibrationStatus::Calibrated);
+  REQUIRE(f.r().raised == 0);
+  CHECK(f.r().eye_height == doctest::Approx(1.50).epsilon(0.002).scale(0));
+  const features::Calibration stand = f.cal.calibration();
+  const int before = f.changes;
+  double raised_at = -1;
+  for (; i < s.size(); ++i) {
+    f.feed(s[i]);
+    if (raised_at < 0 && f.r().raised) raised_at = s[i].time;
+  }
+  CHECK(f.r().raised == 1);
+  CHECK(f.changes == before + 1);
+  CHECK(raised_at == doctest::Approx(2.0 + f.cal.config().rise_time).epsilon(0.04).scale(0));  // rise_time after the walk begins
+  // the lowest headset height of the run: the walk's 1.65 m less its 2 cm bob
+  CHECK(f.r().eye_height == doctest::Approx(1.63).epsilon(0.003).scale(0));
+  CHECK(f.r().stature == doctest::Approx(f.r().eye_height / 0.936).epsilon(1e-9).scale(0));
+  CHECK(f.cal.calibration().scale == doctest::Approx(kStdHead / (f.r().eye_height - 0.08)).epsilon(1e-9).scale(0));
+  CHECK(f.r().status == features::CalibrationStatus::Calibrated);
+  CHECK(f.r().confidence <= 0.5);
+  for (int k = 0; k < 4; ++k) CHECK(f.cal.calibration().offset[k].angularDistance(stand.offset[k]) < 1e-12);  // orientations kept
+  const std::string m = f.r().message;
+  CHECK(m.find("raised from 1.60 m") != std::string::npos);
+  CHECK(m.find("a bent stand") != std::string::npos);
+  CHECK(finite(f.cal.calibration()));
+}
+
+TEST_CASE("auto calibration: no raise for a jump, a walk at the stand's height, an upright stand, tiptoes, or rise_margin = 0") {
+  {  // a 40 cm jump while walking (0.57 s in the air) after an upright stand: its vertical speed
+     // ends every run before rise_time
+    auto s = sparsebody_test::session({{Phase::Stand, 2.0, 1.62}, {Phase::Walk, 2.0, 1.62}});
+    const double v0 = std::sqrt(2 * 9.81 * 0.40);
+    for (auto& fr : s) {
+      const double t = fr.time - 2.5;
+      if (t >= 0 && t < 2 * v0 / 9.81) fr.pose[0].position.y += static_cast<float>(v0 * t - 0.5 * 9.81 * t * t);
+    }
+    Feeder f;
+    f.feed(s);
+    CHECK(f.r().raised == 0);
+    CHECK(f.r().eye_height == doctest::Approx(1.62).epsilon(0.002).scale(0));
+  }
+  {  // walking at the stand's height, then standing 6 cm higher: a new window replaces the estimate
+     // (with orientations), it is not raised
+    Feeder f;
+    f.feed(sparsebody_test::session({{Phase::Stand, 2.0, 1.60}, {Phase::Walk, 2.0, 1.61}, {Phase::Stand, 2.0, 1.66}, {Phase::Walk, 1.0, 1.66}}));
+    CHECK(f.r().raised == 0);
+    CHECK(f.r().replaced == 1);
+    CHECK(f.r().eye_height == doctest::Approx(1.66).epsilon(0.002).scale(0));
+  }
+  {  // standing on tiptoe 6 cm up for 2 s, reaching up (the controllers above the headset: no stand)
+    auto s = sparsebody_test::session({{Phase::Stand, 2.0, 1.62}, {Phase::Walk, 1.0, 1.62}, {Phase::Stand, 2.0, 1.68},
+                                       {Phase::Walk, 1.0, 1.62}});
+    for (auto& fr : s)
+      if (fr.time >= 3.0 && fr.time < 5.0)
+        for (int k = 1; k < 3; ++k) fr.pose[k].position.y = fr.pose[0].position.y + 0.3f;
+    Feeder f;
+    f.feed(s);
+    CHECK(f.r().raised == 0);
+    CHECK(f.r().eye_height == doctest::Approx(1.62).epsilon(0.002).scale(0));
+  }
+  {  // off
+    features::AutoCalibrationConfig cfg;
+    cfg.rise_margin = 0;
+    Feeder f(cfg);
+    f.feed(sparsebody_test::session({{Phase::Stand, 2.0, 1.50}, {Phase::Walk, 3.0, 1.65}}));
+    CHECK(f.r().raised == 0);
+    CHECK(f.r().eye_height == doctest::Approx(1.50).epsilon(0.002).scale(0));
+  }
+}
+
 TEST_CASE("auto calibration: a 2.5 m giant is refused, the default body stays") {
   Feeder f;
   const double eye = 2.5 * 0.936;

@@ -82,6 +82,13 @@ struct AutoCalibrationConfig {
   bool estimate_floor = false;         // floor from the standing eye height (stature assumed)
   double assumed_stature = 1.70;       // m, with estimate_floor
   bool size_from_headset = true;       // the default body no smaller than the first upright headset frame shows (not with estimate_floor)
+  // A bent stand: the headset of a walking user stays more than `rise_margin` above the automatic
+  // estimate's eye height for `rise_time` s: the estimate is raised to the lowest height of that
+  // run (see rise()). 0: off.
+  double rise_margin = 0.04;            // m
+  double rise_time = 0.3;               // s
+  double rise_walk_speed = 0.3;         // m/s: horizontal headset speed of a frame that counts (walking)
+  double rise_max_vertical_speed = 1.0; // m/s: faster up or down ends the run (a jump, sitting down)
   // ... and no larger either: the default body takes the first upright headset frame's stature
   // (within [min_stature, max_stature]) whether above or below the default's. For a simulated
   // avatar as tall as the user (QuestSim sizes its character from the headset, §3.6): a 1.75 m
@@ -111,7 +118,9 @@ class AutoCalibration {
     ++frame_;
     if (!searching()) return false;
     const bool sized = !sized_ && size_from_headset(pose, valid);
-    return search(time, pose, valid) || sized;
+    const bool found = search(time, pose, valid);
+    const bool raised = !found && rise(time, pose, valid);
+    return found || sized || raised;
   }
 
   // Forget everything (estimate, counters, an explicit calibration) and search again: after the
@@ -134,6 +143,7 @@ class AutoCalibration {
 
   // A time discontinuity (reset, gap): the current window ends without being used.
   void break_window() noexcept {
+    rise_run_ = have_head_ = false;
     held_ = 0;
     run_ = 0;
     seg_active_ = used_stand_ = prov_open_ = false;
@@ -193,6 +203,7 @@ class AutoCalibration {
   bool search(double time, const Poses& pose, const Flags& valid) noexcept {
     Sample s;
     const bool ok = qualify(time, pose, valid, s);
+    qualified_ = ok;
     remember(time, pose, valid);
     if (!ok) return end_run();
     if (held_ == kCapacity) {  // full: close the window before its first frame is dropped
@@ -254,6 +265,70 @@ class AutoCalibration {
                   report_.sized_lower_bound ? "no standing frame yet: default body sized to the headset (stature >= %.2f m)"
                          : "no standing frame yet: default body sized to the first upright headset frame (stature ~%.2f m)",
                   stature);
+    return true;
+  }
+
+  // A bent stand. The stillness tests pass in a crouch, a lean or a runner's set position, and
+  // such a window underestimates the stature (offdist devices mode: the 12 of 61 validation clips
+  // whose held first frame is such a stance were sized 4-10 % small). Nobody walks with their eyes
+  // above their standing eye height, so when the (upright) headset of a walking user (horizontal
+  // speed > rise_walk_speed) stays more than rise_margin above the estimate's eye height for
+  // rise_time s, the estimate is raised to the lowest headset height of that run. Frames that could
+  // be a stand do not count (a stand gives a new window, with orientations); neither do tiptoes
+  // (standing) or a jump (vertical speed > rise_max_vertical_speed ends the run: a jump spends
+  // ~0.2 s below 1 m/s). With a pelvis tracker its height is re-set at the run's mean
+  // (Calibration::set_pelvis_height). The orientation offsets are kept: a moving user's frames
+  // are no calibration pose. True when calibration() changed.
+  bool rise(double time, const Poses& pose, const Flags& valid) noexcept {
+    // the headset's velocity from the previous frame (any frame)
+    const bool head = valid[0] && finite(pose[0]) && std::isfinite(time);
+    const double dt = time - head_t_;
+    const bool vel = head && have_head_ && dt > 0 && dt <= cfg_.max_frame_gap;
+    Eigen::Vector3d v = Eigen::Vector3d::Zero();
+    if (vel) v = (pose[0].position - head_p_) / dt;
+    if (head) have_head_ = true, head_t_ = time, head_p_ = pose[0].position;
+    else have_head_ = false;
+    const bool ok = cfg_.rise_margin > 0 && est_n_ > 0 && !cfg_.estimate_floor && vel && !qualified_ &&
+                    report_.status == CalibrationStatus::Calibrated &&
+                    upright(pose[0].orientation.normalized().toRotationMatrix()) &&
+                    pose[0].position.y() > est_eye_ + cfg_.rise_margin &&
+                    std::hypot(v.x(), v.z()) > cfg_.rise_walk_speed && std::abs(v.y()) < cfg_.rise_max_vertical_speed;
+    if (!ok || (rise_run_ && !(time - rise_prev_t_ > 0 && time - rise_prev_t_ <= cfg_.max_frame_gap))) {
+      rise_run_ = false;
+      if (!ok) return false;
+    }
+    const double y = pose[0].position.y();
+    if (!rise_run_) {
+      rise_run_ = true;
+      rise_t0_ = time;
+      rise_min_ = y;
+      rise_pelvis_ = 0;
+      rise_pelvis_n_ = 0;
+    }
+    rise_prev_t_ = time;
+    rise_min_ = std::min(rise_min_, y);
+    if (valid[3] && finite(pose[3])) rise_pelvis_ += pose[3].position.y(), ++rise_pelvis_n_;
+    if (time - rise_t0_ < cfg_.rise_time - 1e-9) return false;
+    rise_run_ = false;
+    const double eye = rise_min_ - calib_.floor, stature = eye / cfg_.eye_height_ratio;
+    if (!(stature <= cfg_.max_stature) || !(scale_of_eye(eye) > 0)) return false;
+    const double from = report_.stature;
+    est_eye_ = est_lo_ = est_hi_ = rise_min_;
+    est_n_ = 1;
+    provisional_ = false;
+    calib_.scale = scale_of_eye(eye);
+    if (rise_pelvis_n_ > 0) calib_.set_pelvis_height(rise_pelvis_ / rise_pelvis_n_, standard_hips_, devices_);
+    CalibrationReport& r = report_;
+    ++r.raised;
+    r.eye_height = eye;
+    r.stature = stature;
+    r.scale = calib_.scale;
+    r.provisional = false;
+    r.confidence = std::min(r.confidence, 0.5);
+    std::snprintf(r.message, sizeof r.message,
+                  "automatic: stature %.2f m (raised from %.2f m: the headset stayed above the stand's height at %.1f-%.1f s, a bent stand), "
+                  "orientations from standing at %.1f-%.1f s",
+                  stature, from, rise_t0_, time, r.first_time, r.last_time);
     return true;
   }
 
@@ -441,6 +516,7 @@ class AutoCalibration {
       }
       return false;
     }
+    rise_run_ = false;
     if (!have || diff > cfg_.agreement) {  // first, or higher: (re)place the estimate
       if (have) ++report_.replaced;
       est_n_ = 1;
@@ -531,6 +607,14 @@ class AutoCalibration {
   double early_next_ = -std::numeric_limits<double>::infinity();  // next provisional try (s)
   bool prov_open_ = false;    // the provisional estimate's window is still open
   bool sized_ = false;        // size_from_headset has looked at an upright headset frame
+  // rise(): the current run of headset frames above the estimate
+  bool rise_run_ = false;
+  bool qualified_ = false;  // the last frame passed the stand search's per-frame tests
+  bool have_head_ = false;  // the previous frame's headset (rise()'s velocity)
+  double head_t_ = 0;
+  Eigen::Vector3d head_p_ = Eigen::Vector3d::Zero();
+  double rise_t0_ = 0, rise_prev_t_ = 0, rise_min_ = 0, rise_pelvis_ = 0;
+  int rise_pelvis_n_ = 0;
   long long seg_start_ = 0, seg_end_ = 0;
   // the estimate
   int est_n_ = 0;

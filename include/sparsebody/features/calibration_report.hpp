@@ -35,6 +35,7 @@ struct CalibrationReport {
   bool floor_estimated = false;  // AutoCalibrationConfig::estimate_floor: stature assumed
   int windows = 0;   // standing windows in the estimate (averaged)
   int replaced = 0;  // estimates replaced by a window more than 4 cm higher
+  int raised = 0;    // estimates raised: the headset stayed above a bent stand's height (AutoCalibration::rise)
   int skipped = 0;   // windows more than 4 cm lower than the estimate (sitting, crouching): not used
   int refused = 0;   // windows whose stature was outside the plausible range: not used
   // The estimate is the first stand's early one (AutoCalibrationConfig::first_window): the window
