@@ -467,6 +467,33 @@ TEST_CASE("LoBSTr pipeline: automatic by default, the calibration change restart
   CHECK(p.calibration_report().status == features::CalibrationStatus::Calibrated);
 }
 
+TEST_CASE("LoBSTr pipeline: a bent first stand is raised when the user walks upright (sized, belt re-set, finite)") {
+  using P = avatar::LoBSTrPipeline<float, 32, 16>;
+  static auto w = P::load(std::string(SPARSEBODY_SOURCE_DIR) + "/tests/pipeline/golden/lobstr_pipeline_small.weights.json");
+  P p(w);
+  // crouched and still at 1.55 m first (belt at 0.93 m), then walking upright at 1.72 m (belt 1.03 m)
+  const auto s = sparsebody_test::session({{Phase::Stand, 2.0, 1.55}, {Phase::Walk, 3.0, 1.72}});
+  int outputs = 0;
+  for (const auto& f : s) {
+    p.push(f);
+    if (!p.has_output()) continue;
+    ++outputs;
+    bool finite_pose = true;
+    for (const auto& x : p.world().position) finite_pose &= x.allFinite();
+    REQUIRE(finite_pose);
+  }
+  CHECK(outputs > 100);
+  const auto& r = p.calibration_report();
+  CHECK(r.raised == 1);
+  CHECK(r.eye_height == doctest::Approx(1.70).epsilon(0.004).scale(0));  // the walk's lowest head: 1.72 less its 2 cm bob
+  CHECK(p.user_scale() == doctest::Approx((r.eye_height - 0.08) / p.meta().standing_head_height).epsilon(1e-9).scale(0));
+  // the belt re-set at the walk's mean pelvis height: there it is the standard standing hips height
+  trackers::PoseD belt;
+  belt.position = trackers::to_eigen(s.back().pose[3].position);
+  belt.orientation = trackers::to_eigen(s.back().pose[3].orientation);
+  CHECK(p.calibration().apply(3, belt).position.y() == doctest::Approx(p.meta().standing_hips_height).epsilon(0.01).scale(0));
+}
+
 TEST_CASE("LoBSTr pipeline: a calibration that barely changes the size keeps the feet where they are on the floor") {
   using P = avatar::LoBSTrPipeline<float, 256, 128>;
   static auto w = P::load(std::string(SPARSEBODY_SOURCE_DIR) + "/examples/weights/lobstr_compact.weights.json");
