@@ -118,8 +118,12 @@ class AutoCalibration {
     ++frame_;
     if (!searching()) return false;
     const bool sized = !sized_ && size_from_headset(pose, valid);
+    // the headset's velocity from the previous frame, before search() remembers this one
+    Eigen::Vector3d v;
+    const bool vel = head_velocity(time, pose, valid, v);
     const bool found = search(time, pose, valid);
-    const bool raised = !found && rise(time, pose, valid);
+    if (!vel) rise_run_ = false;  // no velocity: not a walking frame, the run ends
+    const bool raised = !found && vel && rise(time, pose, valid, v);
     return found || sized || raised;
   }
 
@@ -143,7 +147,7 @@ class AutoCalibration {
 
   // A time discontinuity (reset, gap): the current window ends without being used.
   void break_window() noexcept {
-    rise_run_ = have_head_ = false;
+    rise_run_ = false;
     held_ = 0;
     run_ = 0;
     seg_active_ = used_stand_ = prov_open_ = false;
@@ -279,16 +283,20 @@ class AutoCalibration {
   // ~0.2 s below 1 m/s). With a pelvis tracker its height is re-set at the run's mean
   // (Calibration::set_pelvis_height). The orientation offsets are kept: a moving user's frames
   // are no calibration pose. True when calibration() changed.
-  bool rise(double time, const Poses& pose, const Flags& valid) noexcept {
-    // the headset's velocity from the previous frame (any frame)
-    const bool head = valid[0] && finite(pose[0]) && std::isfinite(time);
-    const double dt = time - head_t_;
-    const bool vel = head && have_head_ && dt > 0 && dt <= cfg_.max_frame_gap;
-    Eigen::Vector3d v = Eigen::Vector3d::Zero();
-    if (vel) v = (pose[0].position - head_p_) / dt;
-    if (head) have_head_ = true, head_t_ = time, head_p_ = pose[0].position;
-    else have_head_ = false;
-    const bool ok = cfg_.rise_margin > 0 && est_n_ > 0 && !cfg_.estimate_floor && vel && !qualified_ &&
+  // The headset's velocity v from the previous frame search() remembered (valid, within
+  // max_frame_gap); false when there is none.
+  bool head_velocity(double time, const Poses& pose, const Flags& valid, Eigen::Vector3d& v) const noexcept {
+    const double dt = time - prev_time_;
+    if (!std::isfinite(time) || !valid[0] || !finite(pose[0]) || !have_prev_time_ || !prev_valid_[0] || !(dt > 0) ||
+        dt > cfg_.max_frame_gap)
+      return false;
+    v = (pose[0].position - prev_pos_[0]) / dt;
+    return true;
+  }
+
+  // v: the headset's velocity (head_velocity()).
+  bool rise(double time, const Poses& pose, const Flags& valid, const Eigen::Vector3d& v) noexcept {
+    const bool ok = cfg_.rise_margin > 0 && est_n_ > 0 && !cfg_.estimate_floor && !qualified_ &&
                     report_.status == CalibrationStatus::Calibrated &&
                     upright(pose[0].orientation.normalized().toRotationMatrix()) &&
                     pose[0].position.y() > est_eye_ + cfg_.rise_margin &&
@@ -610,9 +618,6 @@ class AutoCalibration {
   // rise(): the current run of headset frames above the estimate
   bool rise_run_ = false;
   bool qualified_ = false;  // the last frame passed the stand search's per-frame tests
-  bool have_head_ = false;  // the previous frame's headset (rise()'s velocity)
-  double head_t_ = 0;
-  Eigen::Vector3d head_p_ = Eigen::Vector3d::Zero();
   double rise_t0_ = 0, rise_prev_t_ = 0, rise_min_ = 0, rise_pelvis_ = 0;
   int rise_pelvis_n_ = 0;
   long long seg_start_ = 0, seg_end_ = 0;
