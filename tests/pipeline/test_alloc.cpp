@@ -68,6 +68,21 @@ TEST_CASE("pipeline frames allocate nothing with the automatic calibration findi
   CHECK(p.has_output());
 }
 
+TEST_CASE("pipeline frames allocate nothing when a bent first stand is raised (AutoCalibration::rise)") {
+  using sparsebody_test::Phase;
+  // crouched and still at 1.55 m, then walking upright at 1.72 m: the estimate is raised mid-walk
+  const auto frames = sparsebody_test::session({{Phase::Stand, 2.0, 1.55}, {Phase::Walk, 3.0, 1.72}}, 72.0);
+  pipeline_test::SmallPipeline p(pipeline_test::small_weights());
+  for (int i = 0; i < 3; ++i) p.push(frames[static_cast<std::size_t>(i)]);
+  {
+    sparsebody_test::AllocationCounter c;
+    for (std::size_t i = 3; i < frames.size(); ++i) p.push(frames[i]);
+    CHECK(c.count() == 0);
+  }
+  CHECK(p.calibration_report().raised == 1);
+  CHECK(p.has_output());
+}
+
 // LoBSTrBatch (avatar/lobstr_batch.hpp): one call for 6 users, shipped weights in float and int8,
 // through calibrations, a lost controller, a NaN burst and a restart.
 TEST_CASE("a LoBSTr batch step allocates nothing") {
