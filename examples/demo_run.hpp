@@ -30,7 +30,7 @@ namespace demo {
 template <class Pipeline, class SetScale>
 bool fit_user(const Options& o, const Input& in, Pipeline& pipe, SetScale&& set_scale) {
   if (in.at_joints) {
-    const double s = sparsebody::pose::leg_length(pipe.skeleton(), pipe.joint_map()) / in.leg;
+    const double s = sparsebody::pose::leg_length(pipe.standard_skeleton(), pipe.joint_map()) / in.leg;
     set_scale(s);
     std::printf("scale   %.3f to the standard skeleton (leg length; trackers at the joints)\n", s);
     if (o.calibration_forced) std::printf("note    --calibration-frame is not used: these trackers are synthesised at the joints\n");
@@ -67,6 +67,10 @@ void print_calibration(const Options& o, const Input& in, const Pipeline& pipe) 
     if (r.refused > 0) std::printf(", %d implausible not used", r.refused);
     if (r.floor_estimated) std::printf(", floor estimated at y = %.2f m", r.floor);
     std::printf("\n");
+    const sparsebody::pose::BodyProportions& b = pipe.body_proportions();
+    if (!b.standard())  // LoBSTr with a pelvis tracker (avatar/lobstr_pipeline.hpp fit_body)
+      std::printf("body    legs x%.3f, torso x%.3f the standard skeleton's (from the pelvis tracker's standing height)\n", b.leg,
+                  b.torso);
   } else if (r.status == f::CalibrationStatus::Refused) {
     std::printf("calib   %s (input frames %ld-%ld)\n", r.message, frame_at(in, r.first_time), frame_at(in, r.last_time));
   } else if (r.sized_from_headset) {  // from the headset height (a lower bound, or QuestSim's estimate), not a calibration

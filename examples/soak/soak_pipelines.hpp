@@ -36,7 +36,7 @@ struct KinematicAdapter {
 
   template <class W>
   KinematicAdapter(W&& weights, double clip_leg) : pipe(std::forward<W>(weights)) {
-    const double s = sb::pose::leg_length(pipe.skeleton(), pipe.joint_map()) / clip_leg;  // clips -> standard skeleton
+    const double s = sb::pose::leg_length(pipe.standard_skeleton(), pipe.joint_map()) / clip_leg;  // clips -> standard skeleton
     set_scale(proper, s);
     pipe.set_calibration(proper);
     head = pipe.joint_map()[sb::pose::Role::Head];

@@ -64,6 +64,7 @@ TEST_CASE("pipeline frames allocate nothing with the automatic calibration findi
     CHECK(c.count() == 0);
   }
   CHECK(p.calibration_report().status == features::CalibrationStatus::Calibrated);
+  CHECK(p.body_proportions().leg != 1.0);  // the output skeleton was re-proportioned in there too
   CHECK(p.calibration_report().skipped + p.calibration_report().refused >= 1);
   CHECK(p.has_output());
 }

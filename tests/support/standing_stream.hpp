@@ -15,6 +15,7 @@ struct Phase {
   enum Kind { Stand, Walk } kind = Stand;
   double seconds = 1.0;
   double eye = 1.62;  // headset height (m)
+  double belt = 0.6;  // pelvis tracker height / headset height (0.6: about the standard proportions' hips)
 };
 
 // Frames at `rate` Hz; the user faces -Z (identity headset orientation) turned by `yaw` about +Y.
@@ -46,7 +47,7 @@ inline std::vector<sparsebody::trackers::TrackerFrame> session(const std::vector
       f.pose[0] = {trackers::to_xr(q), trackers::to_xr(head)};
       f.pose[1] = {trackers::to_xr(q), trackers::to_xr(hand[0])};
       f.pose[2] = {trackers::to_xr(q), trackers::to_xr(hand[1])};
-      f.pose[3] = {trackers::to_xr(q), trackers::to_xr(Eigen::Vector3d(head.x(), 0.6 * ph.eye, head.z()))};
+      f.pose[3] = {trackers::to_xr(q), trackers::to_xr(Eigen::Vector3d(head.x(), ph.belt * ph.eye, head.z()))};
       f.valid = {true, true, true, pelvis};
       out.push_back(f);
     }

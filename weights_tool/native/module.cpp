@@ -127,7 +127,8 @@ py::dict report_dict(const features::CalibrationReport& r) {
 class Pipeline {
  public:
   virtual ~Pipeline() = default;
-  virtual const pose::Skeleton& skeleton() const = 0;
+  virtual const pose::Skeleton& skeleton() const = 0;           // the output's (the user's proportions)
+  virtual const pose::Skeleton& standard_skeleton() const = 0;  // the network's
   virtual const pose::JointMap& joint_map() const = 0;
   virtual double frame_rate() const = 0;
   virtual double user_scale() const = 0;
@@ -154,6 +155,7 @@ class PipelineOf : public Pipeline {
   template <class W, class C>
   PipelineOf(const W& w, const C& cfg) : p_(w, cfg) {}
   const pose::Skeleton& skeleton() const override { return p_.skeleton(); }
+  const pose::Skeleton& standard_skeleton() const override { return p_.standard_skeleton(); }
   const pose::JointMap& joint_map() const override { return p_.joint_map(); }
   double frame_rate() const override { return p_.meta().frame_rate; }
   double user_scale() const override { return p_.user_scale(); }
@@ -559,7 +561,7 @@ PYBIND11_MODULE(sparsebody, m) {
            "right) or 4 (+ pelvis). Returns a dict of arrays, one row per input frame (the GIL is released meanwhile).")
       .def("fit_leg_length", [](Pipeline& p, double leg) {
              if (!(std::isfinite(leg) && leg > 0)) throw py::value_error("leg length must be finite and > 0 (m)");
-             const double s = pose::leg_length(p.skeleton(), p.joint_map()) / leg;
+             const double s = pose::leg_length(p.standard_skeleton(), p.joint_map()) / leg;
              p.set_scale(s);
              return s;
            }, py::arg("leg"),

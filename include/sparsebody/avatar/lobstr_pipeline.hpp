@@ -38,6 +38,7 @@
 #include "sparsebody/nn/int8.hpp"
 #include "sparsebody/nn/network.hpp"
 #include "sparsebody/pose/body_pose.hpp"
+#include "sparsebody/pose/body_proportions.hpp"
 #include "sparsebody/pose/contact.hpp"
 #include "sparsebody/pose/ik.hpp"
 #include "sparsebody/pose/joint_map.hpp"
@@ -70,6 +71,12 @@ struct LoBSTrConfig {
   features::DeviceModel devices{};                 // device -> joint offsets (DeviceModel::none(): trackers at the joints)
   features::AutoCalibrationConfig calibration{};   // the standing-window search (enabled by default)
   features::ScaleFrom scale_from = features::ScaleFrom::Head;  // explicit calibrate(frame): head or pelvis height
+  // Any body (pose/body_proportions.hpp): the output skeleton's legs sized by the pelvis tracker's
+  // standing height (Calibration::hips_height), the torso by what is left up to the head, the hips
+  // at the tracker. The network's input is unchanged (it sees the standard hips height). The leg
+  // ratio is kept within 1 +- leg_ratio_limit (the training bodies' +-8 % and the belt's placement).
+  bool fit_legs = true;
+  double leg_ratio_limit = 0.12;
 };
 
 // W: the network's stored weight type: T, nn::f16 (half the bytes) or nn::q8 (int8, a quarter;
@@ -90,6 +97,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       : cfg_(cfg), meta_(predict::LoBSTrMeta::from(w->info())), net_(w) {
     const pose::Skeleton& s = meta_.skeleton;
     map_ = pose::JointMap::from_names(s, w->info().source);
+    body_ = s;  // the user's proportions are written into this copy (no allocation later)
     F_hips_T_ = pose::hips_tracker_frame(s, map_).transpose();
     this->start_front_end(meta_.frame_rate, cfg.sanitizer, s.size());
     still_ = trackers::Stillness(cfg.stillness);
@@ -108,6 +116,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   void set_calibration(const features::Calibration& c) noexcept {
     calib_ = c;
     auto_.set_explicit(c, features::CalibrationSource::Application);
+    fit_body();
     reset_state();
   }
   const features::Calibration& calibration() const noexcept { return calib_; }
@@ -118,6 +127,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     if (!c.from_tpose(frame, meta_.standing_hips_height, meta_.standing_head_height, cfg_.devices, cfg_.scale_from)) return false;
     calib_ = c;
     auto_.set_explicit(c, features::CalibrationSource::Explicit, frame.time);
+    fit_body();
     reset_state();
     return true;
   }
@@ -125,6 +135,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   void recalibrate() noexcept {
     auto_.recalibrate();
     calib_ = auto_.calibration();
+    fit_body();
     reset_state();
   }
   // What the calibration in use is based on (default body, automatic, explicit, refused).
@@ -155,6 +166,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     if (auto_.push(f.time, s.pose, s.measured)) {  // a new calibration found while running
       const double k = auto_.calibration().scale / calib_.scale;
       calib_ = auto_.calibration();
+      fit_body();
       // A refinement (the size within 5 %): the feature history starts again (no velocity spike
       // from the new offsets and scale), the GRU carries on (but see `first`), and the foot locks and the stillness
       // detector move with the standard-scale world (x k on the ground), so the avatar's feet stay
@@ -199,8 +211,8 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   void end_step(const T* y) noexcept {
     for (int i = 0; i < Net::out_size; ++i) y_[i] = y[i];
     decode_lower_body();
-    if (cfg_.upper_body_ik) upper_.solve(meta_.skeleton, cal_, out_.pose(), out_.world());
-    pose::forward_kinematics(meta_.skeleton, out_.pose(), out_.world());
+    if (cfg_.upper_body_ik) upper_.solve(body_, cal_, out_.pose(), out_.world());
+    pose::forward_kinematics(body_, out_.pose(), out_.world());
     contacts_and_legs();
     // The last-good guard, new with the shared front end (LoBSTr had none): a frame that would not
     // be finite keeps the last pose and restarts the GRU (a NaN would poison its state), as direct
@@ -215,16 +227,22 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       auto_.recalibrate();
       calib_ = auto_.calibration();
     }
+    fit_body();
     auto_.break_window();
     reset_state();
     this->reset_front_end();
   }
 
   // --- results ------------------------------------------------------------------------------
-  // pose(), world(), has_output(), frames() (PipelineFrontEnd): the pose on the standard skeleton
-  // in its scale (metres); multiply positions and offsets by user_scale() for the user's size.
+  // pose(), world(), has_output(), frames() (PipelineFrontEnd): the pose on skeleton() in the
+  // standard skeleton's scale (metres); multiply positions and offsets by user_scale() for the
+  // user's size. skeleton(): the standard skeleton in the user's proportions (body_proportions();
+  // the standard one until a calibration measures them: its offsets change at calibration, in
+  // place); standard_skeleton(): the one the network was trained on.
   double user_scale() const noexcept { return 1.0 / calib_.scale; }
-  const pose::Skeleton& skeleton() const noexcept { return meta_.skeleton; }
+  const pose::Skeleton& skeleton() const noexcept { return body_; }
+  const pose::Skeleton& standard_skeleton() const noexcept { return meta_.skeleton; }
+  const pose::BodyProportions& body_proportions() const noexcept { return prop_; }
   const pose::JointMap& joint_map() const noexcept { return map_; }
   const predict::LoBSTrMeta& meta() const noexcept { return meta_; }
   const T* features() const noexcept { return x_; }
@@ -241,6 +259,22 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   using Base::frames_;
   using Base::out_;
   using Base::stream_;
+
+  // The output skeleton's proportions from the calibration in use: legs r = H_user / H_hips (the
+  // pelvis tracker's standing hips height over the standard one, both in the standard scale),
+  // torso t keeping the standing head height; the hips are lifted by H_user - H_hips above the
+  // network's (standard) pelvis. Without a measured hips height: the standard skeleton.
+  void fit_body() noexcept {
+    prop_ = {};
+    hips_lift_ = 0;
+    const double H = meta_.standing_hips_height;
+    if (cfg_.fit_legs && calib_.hips_height > 0 && H > 0 && std::isfinite(calib_.hips_height)) {
+      prop_.leg = std::clamp(calib_.hips_height / H, 1.0 - cfg_.leg_ratio_limit, 1.0 + cfg_.leg_ratio_limit);
+      prop_.torso = pose::BodyProportions::torso_for_legs(prop_.leg, H, meta_.standing_head_height);
+      hips_lift_ = (prop_.leg - 1.0) * H;
+    }
+    pose::apply_proportions(meta_.skeleton, map_, prop_, body_);
+  }
 
   void reset_state() noexcept {
     net_.reset();
@@ -270,6 +304,9 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   void decode_lower_body() noexcept {
     const trackers::PoseD& pel = cal_[3];
     out_.pose().root_position = pel.position;
+    // the user's hips: where the tracker's joint is, not at the standard height the network saw
+    // (the calibration moved it along the calibrated pelvis's up axis)
+    out_.pose().root_position += pel.orientation * Eigen::Vector3d(0, hips_lift_, 0);
     out_.pose().local[0] = Eigen::Quaterniond(pel.orientation.toRotationMatrix() * F_hips_T_).normalized();
     for (int i = 0; i < 8; ++i) out_.pose().local[meta_.lower[i]] = Eigen::Quaterniond(pose::from6d(y_ + 6 * i));
   }
@@ -277,7 +314,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   // Contacts from the network, foot locks, and leg IK keeping each foot's world orientation.
   void contacts_and_legs() noexcept {
     if (!cfg_.contact_ik) return;
-    const pose::Skeleton& s = meta_.skeleton;
+    const pose::Skeleton& s = body_;
     bool changed = false;
     for (int foot = 0; foot < 2; ++foot) {
       const int* L = meta_.lower + 4 * foot;  // upper leg, lower leg, foot, toes
@@ -313,6 +350,9 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
 
   LoBSTrConfig cfg_;
   predict::LoBSTrMeta meta_;
+  pose::Skeleton body_;            // meta_.skeleton in the user's proportions (prop_)
+  pose::BodyProportions prop_{};
+  double hips_lift_ = 0;           // m, standard scale: the user's standing hips above the standard's
   nn::Network<Net> net_;
   features::Calibration calib_;
   features::AutoCalibration auto_;

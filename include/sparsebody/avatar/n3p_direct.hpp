@@ -52,6 +52,7 @@
 #include "sparsebody/nn/half.hpp"
 #include "sparsebody/nn/int8.hpp"
 #include "sparsebody/pose/body_pose.hpp"
+#include "sparsebody/pose/body_proportions.hpp"
 #include "sparsebody/pose/chain_reach.hpp"
 #include "sparsebody/pose/contact.hpp"
 #include "sparsebody/pose/ik.hpp"
@@ -319,6 +320,9 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   // in its scale (metres); multiply positions and offsets by user_scale() for the user's size.
   double user_scale() const noexcept { return 1.0 / calib_.base.scale; }
   const pose::Skeleton& skeleton() const noexcept { return pred_.skeleton(); }
+  const pose::Skeleton& standard_skeleton() const noexcept { return pred_.skeleton(); }  // = skeleton() here
+  // Standard: no tracker here measures the legs (LoBSTr's pelvis tracker does).
+  const pose::BodyProportions& body_proportions() const noexcept { return prop_; }
   const pose::JointMap& joint_map() const noexcept { return map_; }
   const predict::N3PMeta& meta() const noexcept { return pred_.meta(); }
   const Predictor& predictor() const noexcept { return pred_; }
@@ -449,6 +453,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   features::AutoCalibration auto_;
   long long calibration_changes_ = 0;
   pose::JointMap map_;
+  pose::BodyProportions prop_{};
   // Direct-mode foot pinning (pose::FootLock): the ankle pinned where contact began (its own
   // height; a foot caught in the air by a stop is put down), released over 8 frames; a pin released
   // for distance needs the contact to go off on a later frame before it pins again.

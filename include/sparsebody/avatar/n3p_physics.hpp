@@ -185,6 +185,8 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
   const ModelT& model() const noexcept { return model_; }
   const control::N3PSimRetarget<S, MB, MD>& retarget() const noexcept { return retarget_; }
   const pose::Skeleton& skeleton() const noexcept { return direct_.skeleton(); }
+  const pose::Skeleton& standard_skeleton() const noexcept { return direct_.standard_skeleton(); }
+  const pose::BodyProportions& body_proportions() const noexcept { return direct_.body_proportions(); }
   const pose::JointMap& joint_map() const noexcept { return direct_.joint_map(); }
   // Foot (0 left, 1 right) of the simulated character touching the ground (an active contact on its
   // Foot or Toes body in the last step): the physical contact, not the predicted one.

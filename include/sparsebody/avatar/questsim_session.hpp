@@ -32,6 +32,7 @@
 #include "sparsebody/avatar/questsim.hpp"
 #include "sparsebody/features/auto_calibration.hpp"
 #include "sparsebody/features/device_model.hpp"
+#include "sparsebody/pose/body_proportions.hpp"
 #include "sparsebody/pose/joint_map.hpp"
 #include "sparsebody/pose/pose_output.hpp"
 #include "sparsebody/pose/skeleton.hpp"
@@ -134,6 +135,8 @@ class QuestSimSession {
   double output_time() const noexcept { return pipe_.tracked_time(); }
   double delay_seconds() const noexcept { return pipe_.latency(); }
   const pose::Skeleton& skeleton() const noexcept { return skeleton_; }
+  const pose::Skeleton& standard_skeleton() const noexcept { return skeleton_; }
+  const pose::BodyProportions& body_proportions() const noexcept { return prop_; }  // standard (the simulated avatar's)
   const pose::JointMap& joint_map() const noexcept { return map_; }
   double user_scale() const noexcept { return pipe_.user_height() / kDefaultStature; }
   bool contact(int foot) const noexcept {
@@ -203,6 +206,7 @@ class QuestSimSession {
   Pipeline pipe_;
   pose::Skeleton skeleton_;
   pose::JointMap map_;
+  pose::BodyProportions prop_{};
   features::AutoCalibration auto_;
   std::unique_ptr<features::AutoCalibration> trial_;  // calibrate()'s scratch copy
   pose::PoseOutput out_;

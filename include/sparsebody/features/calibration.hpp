@@ -41,6 +41,11 @@ struct Calibration {
       Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};  // d_k
   double scale = 1.0;  // s: user -> standard skeleton
   double floor = 0.0;  // world y of the floor (the reference space's y = 0 unless estimated)
+  // The user's standing hips-joint height in the standard skeleton's scale, from a pelvis tracker
+  // at calibration (its height minus the device model's offset, times s); 0: not measured. The
+  // pipelines size the output skeleton's legs by it (pose/body_proportions.hpp); the network keeps
+  // seeing the standard height (set_pelvis_height).
+  double hips_height = 0.0;
 
   // Before calibration: half-turn orientation offsets, the device offsets, the default body.
   static Calibration uncalibrated(const DeviceModel& d) noexcept {
@@ -104,6 +109,7 @@ struct Calibration {
   // height > 0; the horizontal offset stays the device model's.
   void set_pelvis_height(double pelvis_y, double standard_hips_height, const DeviceModel& devices) noexcept {
     if (!devices.pelvis_from_standing || !(standard_hips_height > 0) || !std::isfinite(pelvis_y) || !(scale > 0)) return;
+    hips_height = (pelvis_y - floor - devices.pelvis.y()) * scale;
     position_offset[3] = devices.pelvis;
     position_offset[3].y() = pelvis_y - floor - standard_hips_height / scale;
   }
