@@ -91,6 +91,22 @@ TEST_CASE("n3p pipeline: no allocation per frame with the automatic calibration 
   CHECK(p.has_output());
 }
 
+TEST_CASE("n3p pipeline: no allocation per frame while the arms are lengthened (arm reach), shipped weights") {
+  using sparsebody_test::Phase;
+  auto frames = sparsebody_test::session({{Phase::Stand, 3.0, 1.75}}, 72.0);
+  sparsebody_test::reach_out(frames, 1.0, 0.50, 72.0);  // controllers beyond the standard arms' reach
+  avatar::N3PDirect p(avatar::N3PDirect::load(std::string(SPARSEBODY_SOURCE_DIR) + "/examples/weights/n3p"));
+  for (int i = 0; i < 3; ++i) p.push(frames[static_cast<std::size_t>(i)]);
+  long long n = 0;
+  {
+    sparsebody_test::AllocationCounter counter;
+    for (std::size_t i = 3; i < frames.size(); ++i) p.push(frames[i]);
+    n = counter.count();
+  }
+  CHECK(n == 0);
+  CHECK(p.body_proportions().arm > 1.03);
+}
+
 // N3PBatch (avatar/n3p_batch.hpp): one call for 6 users, shipped weights in float and int8,
 // through calibrations, a lost controller, a NaN burst and a restart.
 TEST_CASE("n3p batch: a batch step allocates nothing") {

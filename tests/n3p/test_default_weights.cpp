@@ -197,3 +197,41 @@ TEST_CASE("n3p default weights: head height: a jump takes the feet off the floor
   CHECK(air_slow > 0.1);    // the pins held the body down until the release height
   CHECK(after < 0.06);      // back on the floor (a standing toe joint is ~4 cm up)
 }
+
+TEST_CASE("n3p default weights: controllers held beyond the standard arm's reach lengthen the arms; the hands reach them") {
+  using sparsebody_test::Phase;
+  const auto w = Paper::load(prefix());
+  auto run = [&](bool fit, double* gap, double* arm) {
+    avatar::N3PConfig cfg;
+    cfg.arm_reach.enabled = fit;
+    Paper p(w, cfg);
+    auto frames = sparsebody_test::session({{Phase::Stand, 3.0, 1.75}}, 30.0);
+    sparsebody_test::reach_out(frames, 1.0, 0.50);
+    for (const auto& f : frames) p.push(f);
+    REQUIRE(p.calibration_report().status == features::CalibrationStatus::Calibrated);
+    *gap = 0;
+    for (int side = 0; side < 2; ++side) {
+      trackers::PoseD c;
+      c.position = trackers::to_eigen(frames.back().pose[1 + side].position);
+      c.orientation = trackers::to_eigen(frames.back().pose[1 + side].orientation);
+      const Eigen::Vector3d target = p.calibration().apply(1 + side, c).p;
+      const int hand = p.skeleton().find(side == 0 ? "Hand_L" : "Hand_R");
+      *gap = std::max(*gap, (p.world().position[hand] - target).norm());
+    }
+    *arm = p.body_proportions().arm;
+    const int lower = p.skeleton().find("LowerArm_L");
+    CHECK(p.skeleton().offsets[lower].norm() == doctest::Approx(*arm * p.standard_skeleton().offsets[lower].norm()));
+    p.recalibrate();  // a new user: the standard arms
+    CHECK(p.body_proportions().arm == 1.0);
+    CHECK(p.skeleton().offsets[lower] == p.standard_skeleton().offsets[lower]);
+  };
+  double gap_fit, gap_std, arm_fit, arm_std;
+  run(true, &gap_fit, &arm_fit);
+  run(false, &gap_std, &arm_std);
+  MESSAGE("arm ratio " << arm_fit << ", hands short of the controllers by " << gap_std << " m with the standard arms");
+  CHECK(arm_std == 1.0);
+  CHECK(gap_std > 0.02);
+  CHECK(arm_fit > 1.03);
+  CHECK(arm_fit < 1.12);
+  CHECK(gap_fit < 0.005);
+}

@@ -84,6 +84,21 @@ TEST_CASE("pipeline frames allocate nothing when a bent first stand is raised (A
   CHECK(p.has_output());
 }
 
+TEST_CASE("pipeline frames allocate nothing while the legs are sized and the arms lengthened (body proportions)") {
+  using sparsebody_test::Phase;
+  auto frames = sparsebody_test::session({{Phase::Stand, 3.0, 1.75, 0.66}}, 72.0);  // a long-legged belt
+  sparsebody_test::reach_out(frames, 1.0, 0.56, 72.0);                            // arms beyond the standard reach
+  pipeline_test::SmallPipeline p(pipeline_test::small_weights());
+  for (int i = 0; i < 3; ++i) p.push(frames[static_cast<std::size_t>(i)]);
+  {
+    sparsebody_test::AllocationCounter c;
+    for (std::size_t i = 3; i < frames.size(); ++i) p.push(frames[i]);
+    CHECK(c.count() == 0);
+  }
+  CHECK(p.body_proportions().leg > 1.03);
+  CHECK(p.body_proportions().arm > 1.03);
+}
+
 // LoBSTrBatch (avatar/lobstr_batch.hpp): one call for 6 users, shipped weights in float and int8,
 // through calibrations, a lost controller, a NaN burst and a restart.
 TEST_CASE("a LoBSTr batch step allocates nothing") {

@@ -3,6 +3,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "common.hpp"
@@ -131,4 +132,90 @@ TEST_CASE("LoBSTr pipeline: the output skeleton follows the calibration; standar
   REQUIRE(q.calibration_report().status == features::CalibrationStatus::Calibrated);
   CHECK(q.body_proportions().standard());
   CHECK(q.skeleton().offsets[knee].norm() == thigh);
+}
+
+TEST_CASE("arm reach: raised to the least stretch of a run held for hold_time; glitches, lost sides and short stretches are not") {
+  pose::ArmReachConfig cfg;  // margin 0.01, hold 0.2 s, limit 0.12
+  const double dt = 1.0 / 30;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  SUBCASE("within the reach: nothing") {
+    pose::ArmReach a(cfg);
+    for (int i = 0; i < 100; ++i) CHECK_FALSE(a.update(1.0, 0.95, dt));
+    CHECK(a.ratio() == 1.0);
+  }
+  SUBCASE("a stretch to 1.06 for 0.2 s on one side: the run's least") {
+    pose::ArmReach a(cfg);
+    int raised_at = -1;
+    for (int i = 0; i < 10; ++i)
+      if (a.update(0.9, i % 2 ? 1.06 : 1.07, dt) && raised_at < 0) raised_at = i;
+    CHECK(raised_at == 5);  // the 6th frame completes 0.2 s
+    CHECK(a.ratio() == doctest::Approx(1.06));
+    // within the new reach + margin: no further change
+    for (int i = 0; i < 30; ++i) CHECK_FALSE(a.update(1.065, nan, dt));
+    CHECK(a.ratio() == doctest::Approx(1.06));
+  }
+  SUBCASE("a single stretched frame, or 0.17 s of them, is not enough; a lost controller ends a run") {
+    pose::ArmReach a(cfg);
+    for (int k = 0; k < 20; ++k) {
+      for (int i = 0; i < 5; ++i) CHECK_FALSE(a.update(1.1, 1.1, dt));
+      CHECK_FALSE(a.update(nan, nan, dt));
+    }
+    CHECK(a.ratio() == 1.0);
+  }
+  SUBCASE("held to 1 + limit; reset forgets; disabled never raises") {
+    pose::ArmReach a(cfg);
+    for (int i = 0; i < 30; ++i) a.update(1.5, 1.5, dt);
+    CHECK(a.ratio() == doctest::Approx(1.12));
+    a.reset();
+    CHECK(a.ratio() == 1.0);
+    pose::ArmReachConfig off = cfg;
+    off.enabled = false;
+    pose::ArmReach b(off);
+    for (int i = 0; i < 30; ++i) CHECK_FALSE(b.update(1.5, 1.5, dt));
+  }
+}
+
+TEST_CASE("LoBSTr pipeline: controllers held beyond the standard arm's reach lengthen the arms; the hands reach them") {
+  const double eye = 1.75;
+  auto run = [&](bool fit, double* hand_gap, double* arm) {
+    avatar::LoBSTrConfig cfg;
+    cfg.arm_reach.enabled = fit;
+    Compact p(compact(), cfg);
+    auto frames = sparsebody_test::session({{Phase::Stand, 3.0, eye}}, 30.0);
+    sparsebody_test::reach_out(frames, 1.0, 0.56);
+    for (const auto& f : frames) p.push(f);
+    REQUIRE(p.calibration_report().status == features::CalibrationStatus::Calibrated);
+    // the hand joints against where the calibrated controllers put the wrists (standard scale)
+    double gap = 0;
+    for (int side = 0; side < 2; ++side) {
+      trackers::PoseD c;
+      c.position = trackers::to_eigen(frames.back().pose[1 + side].position);
+      c.orientation = trackers::to_eigen(frames.back().pose[1 + side].orientation);
+      const Eigen::Vector3d target = p.calibration().apply(1 + side, c).position;
+      const int hand = p.joint_map()[side == 0 ? pose::Role::HandL : pose::Role::HandR];
+      gap = std::max(gap, (p.world().position[hand] - target).norm());
+    }
+    *hand_gap = gap;
+    *arm = p.body_proportions().arm;
+    return p.skeleton().offsets[p.skeleton().find("LowerArm_L")].norm() / p.standard_skeleton().offsets[p.skeleton().find("LowerArm_L")].norm();
+  };
+  double gap_fit, gap_std, arm_fit, arm_std;
+  const double upper_ratio = run(true, &gap_fit, &arm_fit);
+  run(false, &gap_std, &arm_std);
+  CHECK(arm_std == 1.0);
+  CHECK(gap_std > 0.02);  // the standard arm falls short of the controllers
+  CHECK(arm_fit > 1.03);
+  CHECK(arm_fit < 1.12);
+  CHECK(upper_ratio == doctest::Approx(arm_fit));  // the skeleton's upper arm carries the ratio
+  CHECK(gap_fit < 0.005);  // on them
+  MESSAGE("arm ratio " << arm_fit << ", hands short of the controllers by " << gap_std << " m with the standard arms");
+  Compact q(compact());
+  auto frames = sparsebody_test::session({{Phase::Stand, 3.0, eye}}, 72.0);
+  sparsebody_test::reach_out(frames, 1.0, 0.56, 72.0);
+  for (const auto& f : frames) q.push(f);
+  CHECK(q.body_proportions().arm > 1.03);  // at 72 Hz as well
+  // recalibrate(): a new user, the standard arms until they are seen again
+  q.recalibrate();
+  CHECK(q.body_proportions().arm == 1.0);
+  CHECK(q.skeleton().offsets[q.skeleton().find("LowerArm_L")] == q.standard_skeleton().offsets[q.skeleton().find("LowerArm_L")]);
 }

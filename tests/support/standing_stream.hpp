@@ -56,4 +56,23 @@ inline std::vector<sparsebody::trackers::TrackerFrame> session(const std::vector
   return out;
 }
 
+// Appends `seconds` of the user standing where the last frame stands with both controllers held out
+// in front, `reach` m ahead of the headset and 0.2 m below it, 0.2 m to each side (arms stretched:
+// for the arm-reach tests, pose/arm_reach.hpp).
+inline void reach_out(std::vector<sparsebody::trackers::TrackerFrame>& frames, double seconds, double reach, double rate = 30.0) {
+  using namespace sparsebody;
+  const trackers::TrackerFrame last = frames.back();
+  const Eigen::Quaterniond q = trackers::to_eigen(last.pose[0].orientation);
+  const Eigen::Vector3d fwd = q * Eigen::Vector3d(0, 0, -1), left = q * Eigen::Vector3d(-1, 0, 0);
+  const Eigen::Vector3d head = trackers::to_eigen(last.pose[0].position);
+  const long n = std::lround(seconds * rate);
+  for (long j = 1; j <= n; ++j) {
+    trackers::TrackerFrame f = last;
+    f.time = last.time + j / rate;
+    f.pose[1].position = trackers::to_xr(Eigen::Vector3d(head + fwd * reach - Eigen::Vector3d(0, 0.2, 0) + left * 0.2));
+    f.pose[2].position = trackers::to_xr(Eigen::Vector3d(head + fwd * reach - Eigen::Vector3d(0, 0.2, 0) - left * 0.2));
+    frames.push_back(f);
+  }
+}
+
 }  // namespace sparsebody_test

@@ -129,6 +129,7 @@ class Pipeline {
   virtual ~Pipeline() = default;
   virtual const pose::Skeleton& skeleton() const = 0;           // the output's (the user's proportions)
   virtual const pose::Skeleton& standard_skeleton() const = 0;  // the network's
+  virtual pose::BodyProportions body_proportions() const = 0;
   virtual const pose::JointMap& joint_map() const = 0;
   virtual double frame_rate() const = 0;
   virtual double user_scale() const = 0;
@@ -156,6 +157,7 @@ class PipelineOf : public Pipeline {
   PipelineOf(const W& w, const C& cfg) : p_(w, cfg) {}
   const pose::Skeleton& skeleton() const override { return p_.skeleton(); }
   const pose::Skeleton& standard_skeleton() const override { return p_.standard_skeleton(); }
+  pose::BodyProportions body_proportions() const override { return p_.body_proportions(); }
   const pose::JointMap& joint_map() const override { return p_.joint_map(); }
   double frame_rate() const override { return p_.meta().frame_rate; }
   double user_scale() const override { return p_.user_scale(); }
@@ -595,6 +597,12 @@ PYBIND11_MODULE(sparsebody, m) {
         for (int r = 0; r < pose::kRoleCount; ++r) d[pose::role_name(static_cast<pose::Role>(r))] = p.joint_map().joint[r];
         return d;
       })
+      .def_property_readonly("body_proportions", [](const Pipeline& p) {
+        const pose::BodyProportions b = p.body_proportions();
+        py::dict d;
+        d["leg"] = b.leg, d["torso"] = b.torso, d["arm"] = b.arm;
+        return d;
+      }, "The output skeleton's segment ratios to the standard one (leg, torso, arm): pose/body_proportions.hpp")
       .def_property_readonly("frame_rate", &Pipeline::frame_rate)
       .def_property_readonly("user_scale", &Pipeline::user_scale)
       .def_property_readonly("physics", &Pipeline::physics)

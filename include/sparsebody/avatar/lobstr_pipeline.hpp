@@ -23,6 +23,7 @@
 #pragma once
 #include <algorithm>
 #include <array>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -37,6 +38,7 @@
 #include "sparsebody/nn/half.hpp"
 #include "sparsebody/nn/int8.hpp"
 #include "sparsebody/nn/network.hpp"
+#include "sparsebody/pose/arm_reach.hpp"
 #include "sparsebody/pose/body_pose.hpp"
 #include "sparsebody/pose/body_proportions.hpp"
 #include "sparsebody/pose/contact.hpp"
@@ -77,6 +79,8 @@ struct LoBSTrConfig {
   // ratio is kept within 1 +- leg_ratio_limit (the training bodies' +-8 % and the belt's placement).
   bool fit_legs = true;
   double leg_ratio_limit = 0.12;
+  // ... and its arms lengthened where the controllers are seen beyond their reach (pose/arm_reach.hpp).
+  pose::ArmReachConfig arm_reach{};
 };
 
 // W: the network's stored weight type: T, nn::f16 (half the bytes) or nn::q8 (int8, a quarter;
@@ -98,6 +102,13 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     const pose::Skeleton& s = meta_.skeleton;
     map_ = pose::JointMap::from_names(s, w->info().source);
     body_ = s;  // the user's proportions are written into this copy (no allocation later)
+    reach_ = pose::ArmReach(cfg.arm_reach);
+    for (int side = 0; side < 2; ++side) {
+      const int hand = map_[side == 0 ? pose::Role::HandL : pose::Role::HandR];
+      elbow_[side] = s.parents[hand];
+      shoulder_[side] = s.parents[elbow_[side]];
+      arm_length_[side] = s.offsets[hand].norm() + s.offsets[elbow_[side]].norm();
+    }
     F_hips_T_ = pose::hips_tracker_frame(s, map_).transpose();
     this->start_front_end(meta_.frame_rate, cfg.sanitizer, s.size());
     still_ = trackers::Stillness(cfg.stillness);
@@ -135,6 +146,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   void recalibrate() noexcept {
     auto_.recalibrate();
     calib_ = auto_.calibration();
+    reach_.reset();
     fit_body();
     reset_state();
   }
@@ -166,6 +178,8 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     if (auto_.push(f.time, s.pose, s.measured)) {  // a new calibration found while running
       const double k = auto_.calibration().scale / calib_.scale;
       calib_ = auto_.calibration();
+      // arms measured at another size were measured on another body (the default one)
+      if (!features::refines_size(k)) reach_.reset();
       fit_body();
       // A refinement (the size within 5 %): the feature history starts again (no velocity spike
       // from the new offsets and scale), the GRU carries on (but see `first`), and the foot locks and the stillness
@@ -204,6 +218,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       }
     }
     calib_.apply(s.pose, cal_);
+    for (int k = 1; k <= 2; ++k) measured_[k - 1] = s.measured[k];
     still_.update(cal_[0].position, cal_[0].orientation, 1.0 / meta_.frame_rate);
     feat_.compute(cal_, x_);
     return x_;
@@ -213,6 +228,10 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     decode_lower_body();
     if (cfg_.upper_body_ik) upper_.solve(body_, cal_, out_.pose(), out_.world());
     pose::forward_kinematics(body_, out_.pose(), out_.world());
+    if (fit_arms() && cfg_.upper_body_ik) {  // lengthened: this frame's arms solved again on them
+      upper_.solve(body_, cal_, out_.pose(), out_.world());
+      pose::forward_kinematics(body_, out_.pose(), out_.world());
+    }
     contacts_and_legs();
     // The last-good guard, new with the shared front end (LoBSTr had none): a frame that would not
     // be finite keeps the last pose and restarts the GRU (a NaN would poison its state), as direct
@@ -227,6 +246,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       auto_.recalibrate();
       calib_ = auto_.calibration();
     }
+    reach_.reset();
     fit_body();
     auto_.break_window();
     reset_state();
@@ -266,6 +286,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   // network's (standard) pelvis. Without a measured hips height: the standard skeleton.
   void fit_body() noexcept {
     prop_ = {};
+    prop_.arm = reach_.ratio();
     hips_lift_ = 0;
     const double H = meta_.standing_hips_height;
     if (cfg_.fit_legs && calib_.hips_height > 0 && H > 0 && std::isfinite(calib_.hips_height)) {
@@ -274,6 +295,18 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       hips_lift_ = (prop_.leg - 1.0) * H;
     }
     pose::apply_proportions(meta_.skeleton, map_, prop_, body_);
+  }
+
+  // The controllers' distance from the shoulders this frame against the standard arm; true when
+  // ArmReach lengthened the arms (body_ re-proportioned).
+  bool fit_arms() noexcept {
+    double e[2];
+    for (int side = 0; side < 2; ++side)
+      e[side] = measured_[side] ? (cal_[1 + side].position - out_.world().position[shoulder_[side]]).norm() / arm_length_[side]
+                                : std::numeric_limits<double>::quiet_NaN();
+    if (!reach_.update(e[0], e[1], 1.0 / meta_.frame_rate)) return false;
+    fit_body();
+    return true;
   }
 
   void reset_state() noexcept {
@@ -353,6 +386,10 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   pose::Skeleton body_;            // meta_.skeleton in the user's proportions (prop_)
   pose::BodyProportions prop_{};
   double hips_lift_ = 0;           // m, standard scale: the user's standing hips above the standard's
+  pose::ArmReach reach_;
+  int elbow_[2] = {}, shoulder_[2] = {};
+  double arm_length_[2] = {1, 1};  // standard upper arm + forearm
+  bool measured_[2] = {};          // the controllers measured this frame (not held)
   nn::Network<Net> net_;
   features::Calibration calib_;
   features::AutoCalibration auto_;

@@ -51,6 +51,7 @@
 #include "sparsebody/features/n3p_calibration.hpp"
 #include "sparsebody/nn/half.hpp"
 #include "sparsebody/nn/int8.hpp"
+#include "sparsebody/pose/arm_reach.hpp"
 #include "sparsebody/pose/body_pose.hpp"
 #include "sparsebody/pose/body_proportions.hpp"
 #include "sparsebody/pose/chain_reach.hpp"
@@ -66,6 +67,9 @@ struct N3PConfig {
   double contact_threshold = 0.5;  // c above which a foot is in contact
   bool foot_ik = true;             // pin feet in contact (direct mode)
   bool hand_ik = true;             // hands on the measured controllers (direct mode)
+  // The output skeleton's arms lengthened where the controllers are seen beyond their reach
+  // (pose/arm_reach.hpp; skeleton() is then the standard one with longer arms).
+  pose::ArmReachConfig arm_reach{};
   bool use_controllers = true;     // false: HMD-only mode even when controllers are tracked
   double controller_max_distance = 1.5;  // from the headset (m, user's size); further: missing
   double foot_max_drift = 0.3;     // a pinned foot further than this from the prediction is released (m)
@@ -156,6 +160,9 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       reach_[side] = s.offsets[leg_[side][1]].norm() + s.offsets[leg_[side][2]].norm();
     head_ = f("Head");
     spine_ = pose::ChainReach(pred_.skeleton(), head_, 3);
+    body_ = s;  // the user's proportions are written into this copy (no allocation later)
+    arm_reach_ = pose::ArmReach(cfg.arm_reach);
+    for (int side = 0; side < 2; ++side) arm_length_[side] = s.offsets[arm_[side][1]].norm() + s.offsets[arm_[side][2]].norm();
     auto_ = features::AutoCalibration(cfg.devices, pred_.meta().standing_head_height, cfg.calibration);
     calib_.base = auto_.calibration();
     reset();
@@ -188,6 +195,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     auto_.recalibrate();
     calib_ = features::n3p::N3PCalibration{};
     calib_.base = auto_.calibration();
+    fit_arms_reset();
     reset_state();
     ++calibration_changes_;
   }
@@ -242,6 +250,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       const std::array<pose::FootLock, 2> locks{lock_[0], lock_[1]};
       const bool restart = !features::refines_size(k);
       if (restart) {
+        fit_arms_reset();  // arms measured at another size were measured on another body
         reset_state();
       } else {
         pred_.rescale_ground(k);
@@ -279,7 +288,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     const features::n3p::TrackerSet& o = trackers_;
     const std::array<bool, 3>& present = present_;
     out_.pose() = pred_.pose();  // same size: no allocation
-    pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
+    pose::forward_kinematics(body_, out_.pose(), out_.world());
     if (cfg_.anchor_head && head_ >= 0) {
       const Eigen::Vector3d d = o[0].p - out_.world().position[head_];
       Eigen::Vector3d shift = cfg_.anchor_gain * Eigen::Vector3d(d.x(), 0.0, d.z());
@@ -290,15 +299,17 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       for (auto& p : out_.world().position) p += shift;
     }
     if (cfg_.head_reach && !spine_.empty()) {
-      spine_.solve(pred_.skeleton(), out_.pose(), out_.world(), o[0].p, cfg_.spine);
-      pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
+      spine_.solve(body_, out_.pose(), out_.world(), o[0].p, cfg_.spine);
+      pose::forward_kinematics(body_, out_.pose(), out_.world());
     }
     if (cfg_.head_height && head_ >= 0) follow_head_height(o[0].p.y());
     if (cfg_.foot_ik) pin_feet();
-    if (cfg_.hand_ik)
+    if (cfg_.hand_ik) {
+      fit_arms(o, present);
       for (int side = 0; side < 2; ++side)
         if (present[1 + side]) put_limb(arm_[side], o[1 + side].p);
-    if (cfg_.foot_ik || cfg_.hand_ik) pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
+    }
+    if (cfg_.foot_ik || cfg_.hand_ik) pose::forward_kinematics(body_, out_.pose(), out_.world());
     if (!out_.commit()) reset_state();  // never hand out a NaN: the last pose is kept; restart
   }
 
@@ -310,6 +321,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       calib_ = features::n3p::N3PCalibration{};
       calib_.base = auto_.calibration();
     }
+    fit_arms_reset();
     auto_.break_window();
     reset_state();
     this->reset_front_end();
@@ -319,9 +331,11 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   // pose(), world(), has_output(), frames() (PipelineFrontEnd): the pose on the standard skeleton
   // in its scale (metres); multiply positions and offsets by user_scale() for the user's size.
   double user_scale() const noexcept { return 1.0 / calib_.base.scale; }
-  const pose::Skeleton& skeleton() const noexcept { return pred_.skeleton(); }
-  const pose::Skeleton& standard_skeleton() const noexcept { return pred_.skeleton(); }  // = skeleton() here
-  // Standard: no tracker here measures the legs (LoBSTr's pelvis tracker does).
+  // skeleton(): the output's, the standard skeleton with the user's arms (body_proportions(); the
+  // offsets change in place when the arms are lengthened); standard_skeleton(): the network's.
+  // The legs and torso stay standard: no tracker here shows them (LoBSTr's pelvis tracker does).
+  const pose::Skeleton& skeleton() const noexcept { return body_; }
+  const pose::Skeleton& standard_skeleton() const noexcept { return pred_.skeleton(); }
   const pose::BodyProportions& body_proportions() const noexcept { return prop_; }
   const pose::JointMap& joint_map() const noexcept { return map_; }
   const predict::N3PMeta& meta() const noexcept { return pred_.meta(); }
@@ -343,6 +357,24 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   using Base::frames_;
   using Base::out_;
   using Base::stream_;
+
+  // Arm length from controller reach (pose/arm_reach.hpp): the measured controllers' distance from
+  // the shoulders against the standard arm; longer arms in body_ when ArmReach says so.
+  void fit_arms(const features::n3p::TrackerSet& o, const std::array<bool, 3>& present) noexcept {
+    double e[2];
+    for (int side = 0; side < 2; ++side)
+      e[side] = present[1 + side] ? (o[1 + side].p - out_.world().position[arm_[side][0]]).norm() / arm_length_[side]
+                                  : std::numeric_limits<double>::quiet_NaN();
+    if (!arm_reach_.update(e[0], e[1], 1.0 / pred_.meta().frame_rate)) return;
+    prop_.arm = arm_reach_.ratio();
+    pose::apply_proportions(pred_.skeleton(), map_, prop_, body_);
+    pose::forward_kinematics(body_, out_.pose(), out_.world());  // this frame's IK on the new arms
+  }
+  void fit_arms_reset() noexcept {
+    arm_reach_.reset();
+    prop_ = {};
+    pose::apply_proportions(pred_.skeleton(), map_, prop_, body_);
+  }
 
   void reset_state() noexcept {
     lift_ = 0.0;
@@ -395,7 +427,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     for (auto& p : out_.world().position) p.y() += dy;
     if (dy > 0.0) return;
     for (int side = 0; side < 2; ++side) put_limb(leg_[side], ankle[side]);
-    pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
+    pose::forward_kinematics(body_, out_.pose(), out_.world());
   }
 
   // How far the body can rise with every pinned ankle within 98 % of its leg's reach (+inf: none
@@ -429,7 +461,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
                              target)) {
         lock_[side].orient(out_.world().rotation[l[2]], still);  // planted while still, eased over 8 frames
         put_limb(l, target);
-        pose::forward_kinematics(pred_.skeleton(), out_.pose(), out_.world());
+        pose::forward_kinematics(body_, out_.pose(), out_.world());
       }
       lock_[side].show(out_.world().rotation[l[2]]);
     }
@@ -453,7 +485,10 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   features::AutoCalibration auto_;
   long long calibration_changes_ = 0;
   pose::JointMap map_;
+  pose::Skeleton body_;  // the standard skeleton with the user's arms (prop_)
   pose::BodyProportions prop_{};
+  pose::ArmReach arm_reach_;
+  double arm_length_[2] = {1, 1};  // standard upper arm + forearm
   // Direct-mode foot pinning (pose::FootLock): the ankle pinned where contact began (its own
   // height; a foot caught in the air by a stop is put down), released over 8 frames; a pin released
   // for distance needs the contact to go off on a later frame before it pins again.

@@ -184,9 +184,11 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
   const Sim& simulator() const noexcept { return sim_; }
   const ModelT& model() const noexcept { return model_; }
   const control::N3PSimRetarget<S, MB, MD>& retarget() const noexcept { return retarget_; }
-  const pose::Skeleton& skeleton() const noexcept { return direct_.skeleton(); }
+  // The simulated character's proportions are the standard skeleton's (scaled by the user's size):
+  // skeleton() = standard_skeleton(), whatever the reference's arm fit does.
+  const pose::Skeleton& skeleton() const noexcept { return direct_.standard_skeleton(); }
   const pose::Skeleton& standard_skeleton() const noexcept { return direct_.standard_skeleton(); }
-  const pose::BodyProportions& body_proportions() const noexcept { return direct_.body_proportions(); }
+  const pose::BodyProportions& body_proportions() const noexcept { return prop_; }
   const pose::JointMap& joint_map() const noexcept { return direct_.joint_map(); }
   // Foot (0 left, 1 right) of the simulated character touching the ground (an active contact on its
   // Foot or Toes body in the last step): the physical contact, not the predicted one.
@@ -269,7 +271,7 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
 
   void output() noexcept {
     retarget_.to_pose(model_, sim_.q(), this->out_.pose());
-    pose::forward_kinematics(direct_.skeleton(), this->out_.pose(), this->out_.world());
+    pose::forward_kinematics(direct_.standard_skeleton(), this->out_.pose(), this->out_.world());
     if (!this->out_.commit()) restart_ = true;  // the last finite pose is kept; the physics restarts
   }
 
@@ -294,6 +296,7 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
   long long calibration_seen_ = 0;  // direct_.calibration_changes() already restarted for
   control::ResidualWrench residual_;
   control::ResidualStats stats_;
+  pose::BodyProportions prop_{};  // standard: the simulated character
 };
 
 // The shipped configurations: the paper's network sizes (the default weights, examples/weights/n3p)

@@ -19,6 +19,7 @@ enum class ControllerKind : unsigned char { ModelBased, Policy };
 inline N3PConfig physics_reference_config() noexcept {
   N3PConfig c;
   c.head_height = false;
+  c.arm_reach.enabled = false;  // the simulated character's arms are the avatar's own
   return c;
 }
 
