@@ -7,7 +7,8 @@ against the clip that drove it, the same way for every input path:
            session that starts with the user standing for 2.5 s (--devices-stand 0: the clip's first
            frame held; the held frames are compared with that frame)
   s155, s190, longlegs, shortlegs   the same on validation clips retargeted to other bodies
-           (weights_tool/bodies.py presets)
+           (weights_tool/bodies.py presets; also s172, longarms, shortarms: 1.72 m with standard,
+           x1.08 and x0.92 arms)
   csv      the device-realistic stream written as the demo's tracker CSV (--trackers-out) and read
            back through the CSV path with default options: no T-pose, the user moving from the first
            frame (the default body until then) and standing 2.5 s half-way through the clip
