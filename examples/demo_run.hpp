@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "demo_input.hpp"
+#include "sparsebody/pose/body_proportions.hpp"
 #include "demo_metrics.hpp"
 #include "demo_options.hpp"
 #include "demo_viewer.hpp"
@@ -30,9 +31,18 @@ namespace demo {
 template <class Pipeline, class SetScale>
 bool fit_user(const Options& o, const Input& in, Pipeline& pipe, SetScale&& set_scale) {
   if (in.at_joints) {
-    const double s = sparsebody::pose::leg_length(pipe.standard_skeleton(), pipe.joint_map()) / in.leg;
+    namespace pose = sparsebody::pose;
+    const double s = pose::leg_length(pipe.standard_skeleton(), pipe.joint_map()) / in.leg;
     set_scale(s);
     std::printf("scale   %.3f to the standard skeleton (leg length; trackers at the joints)\n", s);
+    // the output skeleton in the clip's proportions (the trackers are its joints)
+    const pose::BodyProportions b = pose::proportions_by_leg(
+        pose::BodyLengths::of(in.clip.skeleton, pose::JointMap::from_names(in.clip.skeleton, o.input)),
+        pose::BodyLengths::of(pipe.standard_skeleton(), pipe.joint_map()));
+    pipe.set_body_proportions(b);
+    if (!pipe.body_proportions().standard())
+      std::printf("body    torso x%.3f, arms x%.3f the standard skeleton's (the clip's proportions)\n", pipe.body_proportions().torso,
+                  pipe.body_proportions().arm);
     if (o.calibration_forced) std::printf("note    --calibration-frame is not used: these trackers are synthesised at the joints\n");
     return true;
   }

@@ -125,7 +125,8 @@ def run_clip(sb, path, model="lobstr", devices=False, device_seed=0, devices_sta
         raise ValueError(f"{path} has no valid pelvis tracker frame; LoBSTr needs one (use model n3p)")
     pipe = sb.create(model, weights=weights, storage=storage, contact_ik=contact_ik, mode=mode)
     if inp["at_joints"]:
-        pipe.fit_leg_length(inp["leg"])
+        L = inp["lengths"]
+        pipe.fit_leg_length(inp["leg"], L["torso"], L["arm"])
     T = len(inp["time"])
     step = chunk if chunk > 0 else max(T, 1)
     parts = [pipe.run(inp["time"][a:a + step], inp["position"][a:a + step], inp["orientation"][a:a + step],

@@ -130,6 +130,7 @@ class Pipeline {
   virtual const pose::Skeleton& skeleton() const = 0;           // the output's (the user's proportions)
   virtual const pose::Skeleton& standard_skeleton() const = 0;  // the network's
   virtual pose::BodyProportions body_proportions() const = 0;
+  virtual void set_body_proportions(const pose::BodyProportions& b) = 0;
   virtual const pose::JointMap& joint_map() const = 0;
   virtual double frame_rate() const = 0;
   virtual double user_scale() const = 0;
@@ -158,6 +159,7 @@ class PipelineOf : public Pipeline {
   const pose::Skeleton& skeleton() const override { return p_.skeleton(); }
   const pose::Skeleton& standard_skeleton() const override { return p_.standard_skeleton(); }
   pose::BodyProportions body_proportions() const override { return p_.body_proportions(); }
+  void set_body_proportions(const pose::BodyProportions& b) override { p_.set_body_proportions(b); }
   const pose::JointMap& joint_map() const override { return p_.joint_map(); }
   double frame_rate() const override { return p_.meta().frame_rate; }
   double user_scale() const override { return p_.user_scale(); }
@@ -434,6 +436,10 @@ py::dict read_input(const std::string& path, bool devices, unsigned device_seed,
     d["truth_position"] = truth, d["truth_joints"] = clip.skeleton.names, d["truth_roles"] = roles;
     d["clip_frames"] = F, d["clip_frame_time"] = clip.frame_time;
     d["leg"] = syn.leg, d["units"] = units, d["floor"] = syn.floor;
+    const pose::BodyLengths lengths = pose::BodyLengths::of(clip.skeleton, map);
+    py::dict L;
+    L["leg"] = lengths.leg * units, L["torso"] = lengths.torso * units, L["arm"] = lengths.arm * units;
+    d["lengths"] = L;
     d["fps"] = devices ? 72.0 : 1.0 / clip.frame_time;
   } else {
     frames = recordings::read_tracker_csv(path);
@@ -561,13 +567,19 @@ PYBIND11_MODULE(sparsebody, m) {
            py::arg("strict") = true,
            "Push T frames: time [T] s, position [T,K,3] m, orientation [T,K,4] (x,y,z,w), valid [T,K]; K = 3 (head, left, "
            "right) or 4 (+ pelvis). Returns a dict of arrays, one row per input frame (the GIL is released meanwhile).")
-      .def("fit_leg_length", [](Pipeline& p, double leg) {
+      .def("fit_leg_length", [](Pipeline& p, double leg, double torso, double arm) {
              if (!(std::isfinite(leg) && leg > 0)) throw py::value_error("leg length must be finite and > 0 (m)");
              const double s = pose::leg_length(p.standard_skeleton(), p.joint_map()) / leg;
              p.set_scale(s);
+             if (torso > 0 || arm > 0) {
+               pose::BodyLengths user;
+               user.leg = leg, user.torso = torso, user.arm = arm;
+               p.set_body_proportions(pose::proportions_by_leg(user, pose::BodyLengths::of(p.standard_skeleton(), p.joint_map())));
+             }
              return s;
-           }, py::arg("leg"),
-           "Trackers at the joints (read_input's at_joints): scale = standard leg / the clip's leg, as the demo; calibration search off.")
+           }, py::arg("leg"), py::arg("torso") = 0.0, py::arg("arm") = 0.0,
+           "Trackers at the joints (read_input's at_joints): scale = standard leg / the clip's leg, as the demo; calibration search "
+           "off. With the clip's torso and arm (read_input's lengths, m): the output skeleton in the clip's proportions, as the demo.")
       .def("set_scale", [](Pipeline& p, double s) {
              if (!(std::isfinite(s) && s > 0)) throw py::value_error("scale must be finite and > 0");
              p.set_scale(s);

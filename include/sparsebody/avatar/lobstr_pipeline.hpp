@@ -142,10 +142,20 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     reset_state();
     return true;
   }
+  // The user's proportions when the application knows them (an avatar rig; the mocap skeleton that
+  // drives trackers at the joints: pose::proportions_by_leg), used instead of the belt's estimate
+  // (no hips lift: the pelvis tracker is taken as the hips) until recalibrate();
+  // BodyProportions{} goes back to the estimate. Ratios held within [0.75, 1.33].
+  void set_body_proportions(const pose::BodyProportions& b) noexcept {
+    explicit_prop_ = b.sane();
+    explicit_body_ = !explicit_prop_.standard();
+    fit_body();
+  }
   // Forget the calibration (explicit or automatic) and search for standing windows again.
   void recalibrate() noexcept {
     auto_.recalibrate();
     calib_ = auto_.calibration();
+    explicit_body_ = false;
     reach_.reset();
     fit_body();
     reset_state();
@@ -286,14 +296,16 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   // network's (standard) pelvis. Without a measured hips height: the standard skeleton.
   void fit_body() noexcept {
     prop_ = {};
-    prop_.arm = reach_.ratio();
     hips_lift_ = 0;
     const double H = meta_.standing_hips_height;
-    if (cfg_.fit_legs && calib_.hips_height > 0 && H > 0 && std::isfinite(calib_.hips_height)) {
+    if (explicit_body_) {
+      prop_ = explicit_prop_;
+    } else if (cfg_.fit_legs && calib_.hips_height > 0 && H > 0 && std::isfinite(calib_.hips_height)) {
       prop_.leg = std::clamp(calib_.hips_height / H, 1.0 - cfg_.leg_ratio_limit, 1.0 + cfg_.leg_ratio_limit);
       prop_.torso = pose::BodyProportions::torso_for_legs(prop_.leg, H, meta_.standing_head_height);
       hips_lift_ = (prop_.leg - 1.0) * H;
     }
+    prop_.arm = std::max(prop_.arm, reach_.ratio());
     pose::apply_proportions(meta_.skeleton, map_, prop_, body_);
   }
 
@@ -385,6 +397,8 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   predict::LoBSTrMeta meta_;
   pose::Skeleton body_;            // meta_.skeleton in the user's proportions (prop_)
   pose::BodyProportions prop_{};
+  pose::BodyProportions explicit_prop_{};  // set_body_proportions
+  bool explicit_body_ = false;
   double hips_lift_ = 0;           // m, standard scale: the user's standing hips above the standard's
   pose::ArmReach reach_;
   int elbow_[2] = {}, shoulder_[2] = {};

@@ -189,6 +189,9 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
   const pose::Skeleton& skeleton() const noexcept { return direct_.standard_skeleton(); }
   const pose::Skeleton& standard_skeleton() const noexcept { return direct_.standard_skeleton(); }
   const pose::BodyProportions& body_proportions() const noexcept { return prop_; }
+  // Not used: the simulated character keeps the standard proportions (the demo calls it for every
+  // pipeline).
+  void set_body_proportions(const pose::BodyProportions&) noexcept {}
   const pose::JointMap& joint_map() const noexcept { return direct_.joint_map(); }
   // Foot (0 left, 1 right) of the simulated character touching the ground (an active contact on its
   // Foot or Toes body in the last step): the physical contact, not the predicted one.

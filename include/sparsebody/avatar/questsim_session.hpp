@@ -137,6 +137,7 @@ class QuestSimSession {
   const pose::Skeleton& skeleton() const noexcept { return skeleton_; }
   const pose::Skeleton& standard_skeleton() const noexcept { return skeleton_; }
   const pose::BodyProportions& body_proportions() const noexcept { return prop_; }  // standard (the simulated avatar's)
+  void set_body_proportions(const pose::BodyProportions&) noexcept {}  // not used: the simulated avatar's are standard
   const pose::JointMap& joint_map() const noexcept { return map_; }
   double user_scale() const noexcept { return pipe_.user_height() / kDefaultStature; }
   bool contact(int foot) const noexcept {

@@ -26,6 +26,13 @@ struct BodyProportions {
 
   bool standard() const noexcept { return leg == 1.0 && torso == 1.0 && arm == 1.0; }
 
+  // Each ratio held within [0.75, 1.33]; a non-finite one is 1 (what an application's explicit
+  // proportions go through).
+  BodyProportions sane() const noexcept {
+    auto f = [](double r) { return std::isfinite(r) ? std::clamp(r, 0.75, 1.33) : 1.0; };
+    return {f(leg), f(torso), f(arm)};
+  }
+
   // The torso ratio that keeps the standing head height H_head for legs r times the standard
   // (standing hips height H_hips).
   static double torso_for_legs(double r, double standing_hips, double standing_head) noexcept {
@@ -62,6 +69,35 @@ inline void apply_proportions(const Skeleton& standard, const JointMap& m, const
       scale(j, p.torso);
     }
   }
+}
+
+// The segment-group lengths the ratios compare (any units): leg = thigh + shin (leg_length), torso
+// = the rest distance from the hips to the head, arm = upper arm + forearm (left side).
+struct BodyLengths {
+  double leg = 0, torso = 0, arm = 0;
+  static BodyLengths of(const Skeleton& s, const JointMap& m) noexcept {
+    BodyLengths b;
+    b.leg = leg_length(s, m);
+    b.torso = rest_offset(s, m[Role::Head], m[Role::Hips]).norm();
+    const int hand = m[Role::HandL];
+    const int lower = hand > 0 ? s.parents[hand] : -1;
+    b.arm = hand > 0 && lower > 0 ? s.offsets[hand].norm() + s.offsets[lower].norm() : 0;
+    return b;
+  }
+};
+
+// The proportions of a body whose lengths are `user` (any units), sized to the standard skeleton by
+// leg length (as trackers at the joints of a mocap clip are: the demo's BVH input): leg 1, torso and
+// arm the user's over the standard's after that scaling, each held within [0.75, 1.33] (a length
+// that does not map is 1).
+inline BodyProportions proportions_by_leg(const BodyLengths& user, const BodyLengths& standard) noexcept {
+  BodyProportions p;
+  if (!(user.leg > 0) || !(standard.leg > 0)) return p;
+  const double k = standard.leg / user.leg;
+  auto ratio = [&](double u, double s) { return u > 0 && s > 0 && std::isfinite(u) ? std::clamp(k * u / s, 0.75, 1.33) : 1.0; };
+  p.torso = ratio(user.torso, standard.torso);
+  p.arm = ratio(user.arm, standard.arm);
+  return p;
 }
 
 }  // namespace sparsebody::pose
