@@ -235,3 +235,18 @@ TEST_CASE("n3p default weights: controllers held beyond the standard arm's reach
   CHECK(arm_fit < 1.12);
   CHECK(gap_fit < 0.005);
 }
+
+TEST_CASE("n3p default weights: an application's proportions give the arms only (the predictor's torso and legs are standard)") {
+  Paper p(Paper::load(prefix()));
+  pose::BodyProportions b;
+  b.leg = 1.1, b.torso = 1.2, b.arm = 1.1;
+  p.set_body_proportions(b);
+  CHECK(p.body_proportions().leg == 1.0);
+  CHECK(p.body_proportions().torso == 1.0);
+  CHECK(p.body_proportions().arm == doctest::Approx(1.1));
+  const int lower = p.skeleton().find("LowerArm_L"), spine = p.skeleton().find("Spine");
+  CHECK(p.skeleton().offsets[lower].norm() == doctest::Approx(1.1 * p.standard_skeleton().offsets[lower].norm()));
+  CHECK(p.skeleton().offsets[spine] == p.standard_skeleton().offsets[spine]);
+  p.recalibrate();
+  CHECK(p.body_proportions().standard());
+}

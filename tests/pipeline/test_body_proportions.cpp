@@ -168,6 +168,9 @@ TEST_CASE("arm reach: raised to the least stretch of a run held for hold_time; g
     CHECK(a.ratio() == doctest::Approx(1.12));
     a.reset();
     CHECK(a.ratio() == 1.0);
+    a.reset(0.9);  // from shorter arms an application gave: lengthened from there
+    for (int i = 0; i < 6; ++i) a.update(0.95, nan, dt);
+    CHECK(a.ratio() == doctest::Approx(0.95));
     pose::ArmReachConfig off = cfg;
     off.enabled = false;
     pose::ArmReach b(off);
@@ -218,4 +221,40 @@ TEST_CASE("LoBSTr pipeline: controllers held beyond the standard arm's reach len
   q.recalibrate();
   CHECK(q.body_proportions().arm == 1.0);
   CHECK(q.skeleton().offsets[q.skeleton().find("LowerArm_L")] == q.standard_skeleton().offsets[q.skeleton().find("LowerArm_L")]);
+}
+
+TEST_CASE("body lengths: a skeleton's proportions by leg length; an application's proportions override the belt's until recalibrate()") {
+  Compact p(compact());
+  const pose::Skeleton& s = p.standard_skeleton();
+  const pose::BodyLengths std_len = pose::BodyLengths::of(s, p.joint_map());
+  CHECK(std_len.leg == doctest::Approx(pose::leg_length(s, p.joint_map())));
+  CHECK(std_len.torso == doctest::Approx(pose::rest_offset(s, s.find("Head"), 0).norm()));
+  CHECK(std_len.arm == doctest::Approx(s.offsets[s.find("Hand_L")].norm() + s.offsets[s.find("LowerArm_L")].norm()));
+  // a mocap skeleton in centimetres, half the size, torso x1.1 and arms x0.9 of the standard's
+  pose::Skeleton user = s;
+  pose::BodyProportions b;
+  b.torso = 1.1, b.arm = 0.9;
+  pose::apply_proportions(s, p.joint_map(), b, user);
+  for (auto& o : user.offsets) o *= 50.0;
+  const pose::BodyProportions got = pose::proportions_by_leg(pose::BodyLengths::of(user, p.joint_map()), std_len);
+  CHECK(got.leg == 1.0);
+  CHECK(got.torso == doctest::Approx(1.1));
+  CHECK(got.arm == doctest::Approx(0.9));
+  CHECK(pose::proportions_by_leg(pose::BodyLengths{}, std_len).standard());  // nothing to compare: standard
+  // an application's proportions: held sane, used instead of the belt's estimate
+  pose::BodyProportions wild;
+  wild.leg = std::numeric_limits<double>::quiet_NaN(), wild.torso = 3.0, wild.arm = 0.9;
+  p.set_body_proportions(wild);
+  CHECK(p.body_proportions().leg == 1.0);
+  CHECK(p.body_proportions().torso == 1.33);
+  CHECK(p.body_proportions().arm == doctest::Approx(0.9));
+  const int spine = s.find("Spine");
+  CHECK(p.skeleton().offsets[spine].norm() == doctest::Approx(1.33 * s.offsets[spine].norm()));
+  const auto m = predict::LoBSTrMeta::from(compact()->info());
+  for (const auto& f : sparsebody_test::session({{Phase::Stand, 4.0, 1.75, standard_belt_ratio(m, 1.75) * 1.06}}, 72.0)) p.push(f);
+  REQUIRE(p.calibration_report().status == features::CalibrationStatus::Calibrated);
+  CHECK(p.body_proportions().leg == 1.0);  // the application's, not the belt's 1.06
+  CHECK(p.body_proportions().torso == 1.33);
+  p.recalibrate();  // a new user: the estimate again
+  CHECK(p.body_proportions().standard());
 }

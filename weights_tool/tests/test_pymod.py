@@ -183,6 +183,36 @@ def test_calibration_control(sb, model):
     assert p.calibration_report()["source"] == "application"
 
 
+def test_trackers_at_the_joints_take_the_clips_proportions(sb):
+    """read_input's lengths and fit_leg_length(leg, torso, arm), as the demo: LoBSTr's output skeleton
+    in the clip's torso and arms (leg length by the scale), Neural3Points' arms only."""
+    need_clip()
+    inp = sb.read_input(CLIP)
+    L = inp["lengths"]
+    assert L["leg"] == pytest.approx(inp["leg"], rel=1e-6) and L["torso"] > 0 and L["arm"] > 0
+    p = sb.create("lobstr")
+    ref = sb.create("lobstr")
+    s = p.fit_leg_length(inp["leg"], L["torso"] * 1.1, L["arm"])
+    ref.fit_leg_length(inp["leg"])
+    assert ref.body_proportions == {"leg": 1.0, "torso": 1.0, "arm": 1.0}
+    b = p.body_proportions
+    assert b["leg"] == 1.0
+    torso = s * L["torso"] * 1.1  # the clip's torso at the standard size, against the standard's hips-to-head
+    assert b["torso"] == pytest.approx(torso / np.linalg.norm(_rest(ref, ref.roles["head"])), rel=1e-6), b
+    n = sb.create("n3p")
+    n.fit_leg_length(inp["leg"], L["torso"] * 1.1, L["arm"] * 1.1)
+    assert n.body_proportions["torso"] == 1.0 and n.body_proportions["arm"] > 1.0
+
+
+def _rest(p, j):
+    """Rest position of joint j relative to the root (sum of offsets)."""
+    v = np.zeros(3)
+    while j > 0:
+        v += p.offsets[j]
+        j = p.parents[j]
+    return v
+
+
 def test_gil_is_released_during_a_batch(sb):
     """Another Python thread runs while a batch runs (a held GIL would stop it for the whole batch)."""
     need_clip()

@@ -149,6 +149,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   void set_body_proportions(const pose::BodyProportions& b) noexcept {
     explicit_prop_ = b.sane();
     explicit_body_ = !explicit_prop_.standard();
+    reach_.reset(arm_start());  // the reach lengthens from the application's arms
     fit_body();
   }
   // Forget the calibration (explicit or automatic) and search for standing windows again.
@@ -156,7 +157,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     auto_.recalibrate();
     calib_ = auto_.calibration();
     explicit_body_ = false;
-    reach_.reset();
+    reach_.reset(arm_start());
     fit_body();
     reset_state();
   }
@@ -189,7 +190,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       const double k = auto_.calibration().scale / calib_.scale;
       calib_ = auto_.calibration();
       // arms measured at another size were measured on another body (the default one)
-      if (!features::refines_size(k)) reach_.reset();
+      if (!features::refines_size(k)) reach_.reset(arm_start());
       fit_body();
       // A refinement (the size within 5 %): the feature history starts again (no velocity spike
       // from the new offsets and scale), the GRU carries on (but see `first`), and the foot locks and the stillness
@@ -256,7 +257,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       auto_.recalibrate();
       calib_ = auto_.calibration();
     }
-    reach_.reset();
+    reach_.reset(arm_start());
     fit_body();
     auto_.break_window();
     reset_state();
@@ -305,9 +306,10 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       prop_.torso = pose::BodyProportions::torso_for_legs(prop_.leg, H, meta_.standing_head_height);
       hips_lift_ = (prop_.leg - 1.0) * H;
     }
-    prop_.arm = std::max(prop_.arm, reach_.ratio());
+    prop_.arm = reach_.ratio();  // from arm_start(), lengthened where the controllers showed more
     pose::apply_proportions(meta_.skeleton, map_, prop_, body_);
   }
+  double arm_start() const noexcept { return explicit_body_ ? explicit_prop_.arm : 1.0; }
 
   // The controllers' distance from the shoulders this frame against the standard arm; true when
   // ArmReach lengthened the arms (body_ re-proportioned).

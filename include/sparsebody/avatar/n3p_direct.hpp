@@ -197,7 +197,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   void set_body_proportions(const pose::BodyProportions& b) noexcept {
     explicit_prop_ = b.sane();
     explicit_body_ = !explicit_prop_.standard();
-    fit_body();
+    fit_arms_reset();
   }
   // Forget the calibration (explicit or automatic) and search for standing windows again.
   void recalibrate() noexcept {
@@ -380,7 +380,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     pose::forward_kinematics(body_, out_.pose(), out_.world());  // this frame's IK on the new arms
   }
   void fit_arms_reset() noexcept {
-    arm_reach_.reset();
+    arm_reach_.reset(explicit_body_ ? explicit_prop_.arm : 1.0);  // from the application's arms, if any
     fit_body();
   }
   // body_ from the application's proportions (set_body_proportions) or the standard ones, with the
@@ -391,7 +391,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     // Given the CMU clips' torsos (x0.87-1.20), the head reach and height left the head 3.64 cm
     // from the headset instead of 2.70 (offdist cmu; MPJPE 19.59 -> 19.54 cm).
     prop_.leg = prop_.torso = 1.0;
-    prop_.arm = std::max(prop_.arm, arm_reach_.ratio());
+    prop_.arm = arm_reach_.ratio();
     pose::apply_proportions(pred_.skeleton(), map_, prop_, body_);
   }
 

@@ -29,10 +29,10 @@ class ArmReach {
   ArmReach() = default;
   explicit ArmReach(ArmReachConfig cfg) : cfg_(cfg) {}
 
-  // The arm ratio in use (>= 1).
+  // The arm ratio in use (from `start`, the arms the body is known to have: 1 = standard).
   double ratio() const noexcept { return ratio_; }
-  void reset() noexcept {
-    ratio_ = 1.0;
+  void reset(double start = 1.0) noexcept {
+    ratio_ = std::isfinite(start) && start > 0 ? start : 1.0;
     end_run();
   }
 
