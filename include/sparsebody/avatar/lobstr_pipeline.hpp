@@ -239,7 +239,8 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     decode_lower_body();
     if (cfg_.upper_body_ik) upper_.solve(body_, cal_, out_.pose(), out_.world());
     pose::forward_kinematics(body_, out_.pose(), out_.world());
-    if (fit_arms() && cfg_.upper_body_ik) {  // lengthened: this frame's arms solved again on them
+    // the shoulders follow the trackers only with the upper body's IK
+    if (cfg_.upper_body_ik && fit_arms()) {  // lengthened: this frame's arms solved again on them
       upper_.solve(body_, cal_, out_.pose(), out_.world());
       pose::forward_kinematics(body_, out_.pose(), out_.world());
     }
