@@ -139,7 +139,7 @@ std::optional<Metrics> stream(const Options& o, Input& in, Pipeline& pipe, Shown
           gf = std::clamp(static_cast<int>(std::lround(shown / in.clip.frame_time)), 0, in.clip.frames - 1);
           in.truth.at(gf);
         }
-        viewer->add(pipe.world(), user, contact, trk, in.have_truth ? &in.truth.w : nullptr, gf);
+        viewer->add(pipe.pose(), user, contact, trk, in.have_truth ? &in.truth.w : nullptr, gf);
       }
     }
     if (!o.quiet && (i + 1) % report == 0)

@@ -87,7 +87,29 @@ void ViewerRecorder::write(const std::string& path, const std::string& template_
   d["version"] = 1;
   d["frames"] = frames();
   json a = skeleton_json(*skel_);
-  a["pos"] = mm_array(avatar_mm_);
+  // forward kinematics of every frame on the final skeleton (the output BVH's positions)
+  const std::size_t J = static_cast<std::size_t>(skel_->size());
+  std::vector<std::int32_t> avatar_mm;
+  avatar_mm.reserve(frames() * J * 3);
+  std::vector<Eigen::Quaterniond> Rw(J);
+  std::vector<Eigen::Vector3d> P(J);
+  for (std::size_t f = 0; f < frames(); ++f) {
+    for (std::size_t j = 0; j < J; ++j) {
+      const double* c = local_.data() + (f * J + j) * 4;
+      const Eigen::Quaterniond q = Eigen::Quaterniond(c[3], c[0], c[1], c[2]).normalized();
+      const int par = skel_->parents[j];
+      if (par < 0) {
+        Rw[j] = q;
+        P[j] = Eigen::Vector3d(root_[f * 3], root_[f * 3 + 1], root_[f * 3 + 2]);
+      } else {
+        const std::size_t pj = static_cast<std::size_t>(par);
+        Rw[j] = Rw[pj] * q;
+        P[j] = P[pj] + Rw[pj] * (skel_->offsets[j] * last_user_);
+      }
+      for (int k = 0; k < 3; ++k) avatar_mm.push_back(mm(P[j][k]));
+    }
+  }
+  a["pos"] = mm_array(avatar_mm);
   a["head"] = map_[pose::Role::Head];
   a["feet"] = {{map_[pose::Role::FootL], map_[pose::Role::ToeL]}, {map_[pose::Role::FootR], map_[pose::Role::ToeR]}};
   d["avatar"] = a;

@@ -24,7 +24,8 @@ class ViewerRecorder {
              const sparsebody::pose::Skeleton* truth, std::size_t frames) {
     skel_ = &avatar, map_ = map, truth_skel_ = truth;
     const std::size_t ja = static_cast<std::size_t>(avatar.size()), jt = truth ? static_cast<std::size_t>(truth->size()) : 0;
-    avatar_mm_.reserve(frames * ja * 3);
+    local_.reserve(frames * ja * 4);
+    root_.reserve(frames * 3);
     truth_mm_.reserve(frames * jt * 3);
     truth_frame_.reserve(frames);
     tracker_mm_.reserve(frames * sparsebody::trackers::kTrackerCount * 3);
@@ -32,12 +33,18 @@ class ViewerRecorder {
     flags_.reserve(frames);
   }
 
-  // One output frame: world pose at the standard size (`user` scales it to the user, metres), the
-  // feet's contacts, the trackers shown with it and, with ground truth, its world pose and clip frame.
-  void add(const sparsebody::pose::WorldPose& w, double user, const bool (&contact)[2], const sparsebody::trackers::TrackerFrame& trk,
+  // One output frame: the pose (local rotations, root at the standard size; `user` scales the root
+  // to the user, metres), the feet's contacts, the trackers shown with it and, with ground truth,
+  // its world pose and clip frame. The avatar's positions are made at write(), as the output BVH's
+  // are: every frame on the skeleton the run ended with (its proportions and the last `user` size).
+  void add(const sparsebody::pose::BodyPose& p, double user, const bool (&contact)[2], const sparsebody::trackers::TrackerFrame& trk,
            const sparsebody::pose::WorldPose* truth, int truth_frame) {
-    for (int j = 0; j < skel_->size(); ++j)
-      for (int k = 0; k < 3; ++k) avatar_mm_.push_back(mm(w.position[j][k] * user));
+    for (int j = 0; j < skel_->size(); ++j) {
+      const Eigen::Quaterniond& q = p.local[static_cast<std::size_t>(j)];
+      local_.insert(local_.end(), {q.x(), q.y(), q.z(), q.w()});
+    }
+    for (int k = 0; k < 3; ++k) root_.push_back(p.root_position[k] * user);
+    last_user_ = user;
     if (truth_skel_ && truth) {
       for (int j = 0; j < truth_skel_->size(); ++j)
         for (int k = 0; k < 3; ++k) truth_mm_.push_back(mm(truth->position[j][k]));
@@ -73,7 +80,9 @@ class ViewerRecorder {
   const sparsebody::pose::Skeleton* skel_ = nullptr;
   sparsebody::pose::JointMap map_{};
   const sparsebody::pose::Skeleton* truth_skel_ = nullptr;
-  std::vector<std::int32_t> avatar_mm_, truth_mm_, truth_frame_, tracker_mm_;
+  std::vector<double> local_, root_;  // per frame: J quaternions (x y z w), the root (m, user size)
+  double last_user_ = 1.0;
+  std::vector<std::int32_t> truth_mm_, truth_frame_, tracker_mm_;
   std::vector<std::int16_t> tracker_q_;
   std::vector<std::uint8_t> flags_;  // bit 0/1: left/right foot contact; bit 2+t: tracker t valid
 };

@@ -55,14 +55,33 @@ class Run:
         return np.flatnonzero((self.out["steps"] > 0) & self.out["has_output"])
 
     def bvh_positions(self):
-        """World positions [n, J, 3] (m) of the shown rows as the demo's output BVH holds them: the
-        root at each frame's user size, the offsets at the size the run ended with (one skeleton per
-        file). Equal to out["position"] wherever the calibration did not change during the run."""
+        """World positions [n, J, 3] (m) of the shown rows as the demo's output BVH holds them: each
+        row's local rotations and root (at its user size) on the skeleton the run ended with (its
+        proportions, at its final size: one skeleton per file). Equal to out["position"] wherever
+        neither the calibration nor the body proportions changed during the run."""
         i = self.shown()
-        P, u = self.out["position"][i], self.out["user_scale"][i]
-        u_end = self.out["user_scale"][-1]
-        root = P[:, :1]
-        return root + (P - root) * (u_end / u)[:, None, None]
+        Q = self.out["rotation"][i]                                   # [n, J, 4] x y z w, row 0 world
+        root = self.out["root"][i] * self.out["user_scale"][i][:, None]
+        off = np.asarray(self.pipe.offsets) * self.out["user_scale"][-1]
+        par = list(self.pipe.parents)
+        R = quat_matrices(Q)
+        Rw, P = np.empty_like(R), np.empty(Q.shape[:2] + (3,))
+        for j, p in enumerate(par):
+            if p < 0:
+                Rw[:, j], P[:, j] = R[:, j], root
+            else:
+                Rw[:, j] = Rw[:, p] @ R[:, j]
+                P[:, j] = P[:, p] + Rw[:, p] @ off[j]
+        return P
+
+
+def quat_matrices(q):
+    """Rotation matrices [..., 3, 3] of quaternions [..., 4] (x, y, z, w; normalised here)."""
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    return np.stack([np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+                     np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+                     np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1)], -2)
 
 
 def demo_options(extra):

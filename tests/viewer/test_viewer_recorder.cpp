@@ -50,8 +50,10 @@ std::vector<long> ints(const nlohmann::json& a) {
   return v;
 }
 
-void fill(pose::WorldPose& w, int f) {
-  for (std::size_t j = 0; j < w.position.size(); ++j) w.position[j] = Eigen::Vector3d(0.001 * f + 0.01 * j, 1.0 + 0.1 * j, -2.5 + 0.0004 * f);
+// Frame f: the root moving, every joint unrotated (the chain stands straight up from it).
+void fill(pose::BodyPose& p, int f) {
+  p.root_position = Eigen::Vector3d(0.001 * f, 1.0, -2.5 + 0.0004 * f);
+  for (auto& q : p.local) q = Eigen::Quaterniond::Identity();
 }
 }  // namespace
 
@@ -59,7 +61,8 @@ TEST_CASE("viewer recorder: add() within the reservation does not allocate; past
   const pose::Skeleton s = chain(22), t = chain(31);
   demo::ViewerRecorder r;
   r.begin(s, pose::JointMap{}, &t, 200);
-  pose::WorldPose w, gt;
+  pose::BodyPose w;
+  pose::WorldPose gt;
   w.resize(s.size());
   gt.resize(t.size());
   trackers::TrackerFrame trk;
@@ -82,8 +85,9 @@ TEST_CASE("viewer recorder: add() within the reservation does not allocate; past
 TEST_CASE("viewer recorder: the page's arrays decode to the added poses in mm; bad values become 0") {
   const pose::Skeleton s = chain(3);
   demo::ViewerRecorder r;
-  r.begin(s, pose::JointMap{}, nullptr, 4);
-  pose::WorldPose w;
+  pose::Skeleton sk = s;  // the recorder draws the skeleton as it is at write() (the run's last proportions)
+  r.begin(sk, pose::JointMap{}, nullptr, 4);
+  pose::BodyPose w;
   w.resize(s.size());
   trackers::TrackerFrame trk;
   trk.valid = {true, false, true, false};
@@ -93,9 +97,10 @@ TEST_CASE("viewer recorder: the page's arrays decode to the added poses in mm; b
   const bool contact[2] = {false, true};
   for (int f = 0; f < 3; ++f) {
     fill(w, f);
-    if (f == 2) w.position[1].x() = std::nan("");
+    if (f == 2) w.local[1].x() = std::nan("");  // joint 2 of frame 2 (hung from joint 1) is not finite
     r.add(w, 2.0, contact, trk, nullptr, -1);
   }
+  sk.offsets[2] *= 1.5;  // the last joint's bone grew during the run: every frame is drawn with it
   const std::string dir = SPARSEBODY_BINARY_DIR, tpl = dir + "/viewer_test_template.html", three = dir + "/viewer_test_three.js",
                     page = dir + "/viewer_test_page.html";
   std::ofstream(tpl) << "<script>/*SPARSEBODY_THREE_JS*/</script><script>var D = /*SPARSEBODY_DATA*/null;</script>";
@@ -115,11 +120,14 @@ TEST_CASE("viewer recorder: the page's arrays decode to the added poses in mm; b
   REQUIRE(p.size() == 3 * 3 * 3);
   for (int f = 0; f < 3; ++f) {
     fill(w, f);
-    for (int j = 0; j < 3; ++j)
+    for (int j = 0; j < 3; ++j) {
+      // root x 2 (the user's size), then 0.1 m up per bone, the last 0.15 m, times 2
+      const Eigen::Vector3d at = w.root_position * 2.0 + Eigen::Vector3d(0, 2.0 * (j >= 1 ? 0.1 : 0) + 2.0 * (j >= 2 ? 0.15 : 0), 0);
       for (int k = 0; k < 3; ++k) {
-        const long want = f == 2 && j == 1 && k == 0 ? 0 : std::lround(w.position[j][k] * 2.0 * 1000);
+        const long want = f == 2 && j >= 2 ? 0 : std::lround(at[k] * 1000);
         CHECK(p[(f * 3 + j) * 3 + k] == want);
       }
+    }
   }
   const auto tp = ints(d["trackers"]["pos"]);
   CHECK(tp[0] == 123);
