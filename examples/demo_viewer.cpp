@@ -91,23 +91,19 @@ void ViewerRecorder::write(const std::string& path, const std::string& template_
   const std::size_t J = static_cast<std::size_t>(skel_->size());
   std::vector<std::int32_t> avatar_mm;
   avatar_mm.reserve(frames() * J * 3);
-  std::vector<Eigen::Quaterniond> Rw(J);
-  std::vector<Eigen::Vector3d> P(J);
+  pose::BodyPose p;
+  pose::WorldPose w;
+  p.resize(skel_->size());
+  w.resize(skel_->size());
   for (std::size_t f = 0; f < frames(); ++f) {
     for (std::size_t j = 0; j < J; ++j) {
       const double* c = local_.data() + (f * J + j) * 4;
-      const Eigen::Quaterniond q = Eigen::Quaterniond(c[3], c[0], c[1], c[2]).normalized();
-      const int par = skel_->parents[j];
-      if (par < 0) {
-        Rw[j] = q;
-        P[j] = Eigen::Vector3d(root_[f * 3], root_[f * 3 + 1], root_[f * 3 + 2]);
-      } else {
-        const std::size_t pj = static_cast<std::size_t>(par);
-        Rw[j] = Rw[pj] * q;
-        P[j] = P[pj] + Rw[pj] * (skel_->offsets[j] * last_user_);
-      }
-      for (int k = 0; k < 3; ++k) avatar_mm.push_back(mm(P[j][k]));
+      p.local[j] = Eigen::Quaterniond(c[3], c[0], c[1], c[2]).normalized();
     }
+    p.root_position = Eigen::Vector3d(root_[f * 3], root_[f * 3 + 1], root_[f * 3 + 2]);
+    pose::forward_kinematics(*skel_, p, w, last_user_);  // the root at the frame's size, the offsets at the last
+    for (std::size_t j = 0; j < J; ++j)
+      for (int k = 0; k < 3; ++k) avatar_mm.push_back(mm(w.position[j][k]));
   }
   a["pos"] = mm_array(avatar_mm);
   a["head"] = map_[pose::Role::Head];

@@ -15,6 +15,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .lobstr.bvh import fk
+from .lobstr.rotations import quat_to_matrix
+
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 MODELS = ("lobstr", "n3p", "n3p_physics")
 
@@ -60,28 +63,11 @@ class Run:
         proportions, at its final size: one skeleton per file). Equal to out["position"] wherever
         neither the calibration nor the body proportions changed during the run."""
         i = self.shown()
-        Q = self.out["rotation"][i]                                   # [n, J, 4] x y z w, row 0 world
-        root = self.out["root"][i] * self.out["user_scale"][i][:, None]
-        off = np.asarray(self.pipe.offsets) * self.out["user_scale"][-1]
+        R = quat_to_matrix(self.out["rotation"][i])                   # [n, J, 3, 3], row 0 the root's world
+        t = np.broadcast_to(np.asarray(self.pipe.offsets) * self.out["user_scale"][-1], R.shape[:-1]).copy()
         par = list(self.pipe.parents)
-        R = quat_matrices(Q)
-        Rw, P = np.empty_like(R), np.empty(Q.shape[:2] + (3,))
-        for j, p in enumerate(par):
-            if p < 0:
-                Rw[:, j], P[:, j] = R[:, j], root
-            else:
-                Rw[:, j] = Rw[:, p] @ R[:, j]
-                P[:, j] = P[:, p] + Rw[:, p] @ off[j]
-        return P
-
-
-def quat_matrices(q):
-    """Rotation matrices [..., 3, 3] of quaternions [..., 4] (x, y, z, w; normalised here)."""
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    return np.stack([np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
-                     np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
-                     np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1)], -2)
+        t[:, par.index(-1)] = self.out["root"][i] * self.out["user_scale"][i][:, None]
+        return fk(par, R, t)[1]
 
 
 def demo_options(extra):
