@@ -138,6 +138,10 @@ TEST_CASE("arm reach: raised to the least stretch of a run held for hold_time; g
   pose::ArmReachConfig cfg;  // margin 0.01, hold 0.2 s, limit 0.12
   const double dt = 1.0 / 30;
   const double nan = std::numeric_limits<double>::quiet_NaN();
+  // e = |hand - shoulder| / L; not measured (or no arm length): NaN, which update() skips
+  CHECK(pose::ArmReach::stretch(true, Eigen::Vector3d(0.3, 0.4, 0), Eigen::Vector3d::Zero(), 0.5) == doctest::Approx(1.0));
+  CHECK(std::isnan(pose::ArmReach::stretch(false, Eigen::Vector3d(0.3, 0.4, 0), Eigen::Vector3d::Zero(), 0.5)));
+  CHECK(std::isnan(pose::ArmReach::stretch(true, Eigen::Vector3d(0.3, 0.4, 0), Eigen::Vector3d::Zero(), 0.0)));
   SUBCASE("within the reach: nothing") {
     pose::ArmReach a(cfg);
     for (int i = 0; i < 100; ++i) CHECK_FALSE(a.update(1.0, 0.95, dt));
@@ -241,6 +245,22 @@ TEST_CASE("body lengths: a skeleton's proportions by leg length; an application'
   CHECK(got.torso == doctest::Approx(1.1));
   CHECK(got.arm == doctest::Approx(0.9));
   CHECK(pose::proportions_by_leg(pose::BodyLengths{}, std_len).standard());  // nothing to compare: standard
+  CHECK(pose::arm_length(s, s.find("Hand_R")) == doctest::Approx(s.offsets[s.find("Hand_R")].norm() + s.offsets[s.find("LowerArm_R")].norm()));
+  CHECK(pose::arm_length(s, 0) == 0.0);  // the root has no elbow
+  CHECK(pose::arm_length(s, s.size()) == 0.0);
+  // a length that is not a number (a malformed clip) gives 1 for that group, or standard when it is the leg
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  pose::BodyLengths bad = pose::BodyLengths::of(user, p.joint_map());
+  bad.torso = nan;
+  const pose::BodyProportions nt = pose::proportions_by_leg(bad, std_len);
+  CHECK(nt.torso == 1.0);
+  CHECK(nt.arm == doctest::Approx(0.9));
+  bad.leg = nan;
+  CHECK(pose::proportions_by_leg(bad, std_len).standard());
+  bad = pose::BodyLengths::of(user, p.joint_map());
+  bad.arm = std::numeric_limits<double>::infinity();
+  CHECK(pose::proportions_by_leg(bad, std_len).arm == 1.0);
+  CHECK(pose::proportions_by_leg(pose::BodyLengths::of(user, p.joint_map()), pose::BodyLengths{nan, nan, nan}).standard());
   // an application's proportions: held sane, used instead of the belt's estimate
   pose::BodyProportions wild;
   wild.leg = std::numeric_limits<double>::quiet_NaN(), wild.torso = 3.0, wild.arm = 0.9;

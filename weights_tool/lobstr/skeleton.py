@@ -19,22 +19,30 @@ import numpy as np
 from . import bvh
 from .rotations import random_rotations, yaw_frame
 
-# role -> accepted joint names (lower case, non-alphanumerics removed)
+# role -> accepted joint names (normalized: norm_name), tried in order; C++ twin pose/joint_map.hpp
+# (keep equal): wrists before hands and ankles before feet (SMPL names its ankle L_Ankle and its toe
+# L_Foot), a toe falling back to a foot name no other role took.
 ROLE_NAMES = {
     "hips": ["hips", "pelvis", "hip"],
-    "spine": ["spine", "lowerback", "spine1", "abdomen", "waist"],
+    "spine": ["spine", "lowerback", "spine1", "spine01", "abdomen", "waist"],
     "head": ["head"],
-    "hand_l": ["handl", "lefthand", "lhand", "lwrist", "leftwrist"],
-    "hand_r": ["handr", "righthand", "rhand", "rwrist", "rightwrist"],
-    "upleg_l": ["upperlegl", "leftupleg", "lthigh", "leftthigh", "leftupperleg", "lhip", "lefthip"],
-    "upleg_r": ["upperlegr", "rightupleg", "rthigh", "rightthigh", "rightupperleg", "rhip", "righthip"],
-    "leg_l": ["lowerlegl", "leftleg", "lshin", "leftshin", "leftlowerleg", "lknee", "leftknee"],
-    "leg_r": ["lowerlegr", "rightleg", "rshin", "rightshin", "rightlowerleg", "rknee", "rightknee"],
-    "foot_l": ["footl", "leftfoot", "lfoot", "lankle", "leftankle"],
-    "foot_r": ["footr", "rightfoot", "rfoot", "rankle", "rightankle"],
-    "toe_l": ["toesl", "lefttoebase", "lefttoe", "ltoe", "ltoes", "lefttoes"],
-    "toe_r": ["toesr", "righttoebase", "righttoe", "rtoe", "rtoes", "righttoes"],
+    "hand_l": ["lwrist", "leftwrist", "wristl", "handl", "lefthand", "lhand"],
+    "hand_r": ["rwrist", "rightwrist", "wristr", "handr", "righthand", "rhand"],
+    "upleg_l": ["upperlegl", "leftupleg", "lthigh", "leftthigh", "thighl", "leftupperleg", "lupperleg", "lhip", "lefthip"],
+    "upleg_r": ["upperlegr", "rightupleg", "rthigh", "rightthigh", "thighr", "rightupperleg", "rupperleg", "rhip", "righthip"],
+    "leg_l": ["lowerlegl", "leftleg", "lshin", "leftshin", "shinl", "leftlowerleg", "llowerleg", "lcalf", "calfl", "lknee",
+              "leftknee"],
+    "leg_r": ["lowerlegr", "rightleg", "rshin", "rightshin", "shinr", "rightlowerleg", "rlowerleg", "rcalf", "calfr", "rknee",
+              "rightknee"],
+    "foot_l": ["lankle", "leftankle", "anklel", "footl", "leftfoot", "lfoot"],
+    "foot_r": ["rankle", "rightankle", "ankler", "footr", "rightfoot", "rfoot"],
+    "toe_l": ["toesl", "lefttoebase", "lefttoe", "ltoe", "ltoes", "lefttoes", "ltoebase", "toel", "ltoe0", "balll", "footl",
+              "leftfoot", "lfoot"],
+    "toe_r": ["toesr", "righttoebase", "righttoe", "rtoe", "rtoes", "righttoes", "rtoebase", "toer", "rtoe0", "ballr", "footr",
+              "rightfoot", "rfoot"],
 }
+# a rig's name prefix, dropped by norm_name (the longer of two that share a start first)
+RIG_PREFIXES = ("bip001", "bip01", "ccbase", "jbipc", "jbip", "def")
 TRACKED = ["head", "hand_l", "hand_r"]          # order of the three joints in the features
 # The 8 predicted lower-body joints (paper §3: 8 x 6D), standard-skeleton names.
 LOWER = ["UpperLeg_L", "LowerLeg_L", "Foot_L", "Toes_L", "UpperLeg_R", "LowerLeg_R", "Foot_R", "Toes_R"]
@@ -42,18 +50,32 @@ STANDARD_LEG = ("LowerLeg_L", "Foot_L")          # thigh and shin bones: leg len
 
 
 def norm_name(n):
-    return re.sub(r"[^a-z0-9]", "", n.lower())
+    """The part after the last ':' (a namespace), lower case, alphanumerics only, without a rig's prefix."""
+    n = re.sub(r"[^a-z0-9]", "", n.rsplit(":", 1)[-1].lower())
+    for p in RIG_PREFIXES:
+        if len(n) > len(p) and n.startswith(p):
+            return n[len(p):]
+    return n
 
 
 def map_roles(names):
-    """role -> joint index, by names; raises ValueError listing missing roles."""
+    """role -> joint index, by names (pose/joint_map.hpp's rule: exact names first, then, for a role
+    still without a joint, a name ending with a candidate of 4 or more characters; a joint takes one
+    role); raises ValueError listing missing roles."""
     nn_ = [norm_name(n) for n in names]
-    out = {}
-    for role, cands in ROLE_NAMES.items():
-        for c in cands:
-            if c in nn_:
-                out[role] = nn_.index(c)
-                break
+    out, taken = {}, set()
+    for suffix in (False, True):
+        for role, cands in ROLE_NAMES.items():
+            for c in cands:
+                if role in out:
+                    break
+                if suffix and len(c) < 4:
+                    continue
+                for j, n in enumerate(nn_):
+                    if j not in taken and (n.endswith(c) if suffix else n == c):
+                        out[role] = j
+                        taken.add(j)
+                        break
     missing = [r for r in ROLE_NAMES if r not in out and r != "spine"]
     if missing:
         raise ValueError("cannot map joints by name: no joint for " + ", ".join(missing))

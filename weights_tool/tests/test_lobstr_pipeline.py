@@ -167,3 +167,22 @@ def test_committed_golden_reproduces():
         p2, q2, _ = reference.clip_ticks(c, 30.0, 0, len(pos))
         assert np.abs(p2 - pos).max() < 1e-6
         assert np.abs(reference.clip_scale(c) - g["scale"]) < 1e-12
+
+
+def test_joint_roles_of_common_rigs():
+    """map_roles, the twin of pose/joint_map.hpp, on the rigs of tests/pipeline/rig_names.json (the
+    C++ test reads the same file)."""
+    root = os.path.join(os.path.dirname(__file__), "..", "..")
+    with open(os.path.join(root, "tests", "pipeline", "rig_names.json")) as f:
+        d = json.load(f)
+    assert len(d["rigs"]) >= 12
+    for r in d["rigs"]:
+        m = skeleton.map_roles(r["names"])
+        got = {role: (r["names"][m[role]] if role in m else None) for role in skeleton.ROLE_NAMES}
+        assert got == r["roles"], r["rig"]
+    assert skeleton.norm_name("mixamorig:LeftUpLeg") == "leftupleg"
+    assert skeleton.norm_name("Bip01 L Thigh") == "lthigh"
+    assert skeleton.norm_name("Bip01") == "bip01"
+    for r in d["unmappable"]:
+        with pytest.raises(ValueError, match="no joint for " + ", ".join(r["missing"])):
+            skeleton.map_roles(r["names"])

@@ -103,12 +103,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     map_ = pose::JointMap::from_names(s, w->info().source);
     body_ = s;  // the user's proportions are written into this copy (no allocation later)
     reach_ = pose::ArmReach(cfg.arm_reach);
-    for (int side = 0; side < 2; ++side) {
-      const int hand = map_[side == 0 ? pose::Role::HandL : pose::Role::HandR];
-      elbow_[side] = s.parents[hand];
-      shoulder_[side] = s.parents[elbow_[side]];
-      arm_length_[side] = s.offsets[hand].norm() + s.offsets[elbow_[side]].norm();
-    }
+    for (int side = 0; side < 2; ++side) arm_length_[side] = pose::arm_length(s, map_[side == 0 ? pose::Role::HandL : pose::Role::HandR]);
     F_hips_T_ = pose::hips_tracker_frame(s, map_).transpose();
     this->start_front_end(meta_.frame_rate, cfg.sanitizer, s.size());
     still_ = trackers::Stillness(cfg.stillness);
@@ -317,8 +312,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   bool fit_arms() noexcept {
     double e[2];
     for (int side = 0; side < 2; ++side)
-      e[side] = measured_[side] ? (cal_[1 + side].position - out_.world().position[shoulder_[side]]).norm() / arm_length_[side]
-                                : std::numeric_limits<double>::quiet_NaN();
+      e[side] = pose::ArmReach::stretch(measured_[side], cal_[1 + side].position, out_.world().position[upper_.shoulder(side)], arm_length_[side]);
     if (!reach_.update(e[0], e[1], 1.0 / meta_.frame_rate)) return false;
     fit_body();
     return true;
@@ -404,7 +398,6 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   bool explicit_body_ = false;
   double hips_lift_ = 0;           // m, standard scale: the user's standing hips above the standard's
   pose::ArmReach reach_;
-  int elbow_[2] = {}, shoulder_[2] = {};
   double arm_length_[2] = {1, 1};  // standard upper arm + forearm
   bool measured_[2] = {};          // the controllers measured this frame (not held)
   nn::Network<Net> net_;

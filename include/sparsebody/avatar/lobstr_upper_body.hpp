@@ -42,6 +42,9 @@ class LoBSTrUpperBody {
     if (lateral_local_.norm() < 1e-6) lateral_local_ = Eigen::Vector3d::UnitZ();
   }
 
+  // The shoulder joint (the upper arm's root) of side 0 (left) or 1 (right).
+  int shoulder(int side) const noexcept { return arm_[side][0]; }
+
   // cal: the calibrated trackers (head, left hand, right hand, pelvis: X left, Y up, Z forward).
   // pose: root position and hips rotation set; writes the upper body's local rotations. world:
   // forward kinematics of the spine and clavicles (the arms' is the caller's).

@@ -162,7 +162,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     spine_ = pose::ChainReach(pred_.skeleton(), head_, 3);
     body_ = s;  // the user's proportions are written into this copy (no allocation later)
     arm_reach_ = pose::ArmReach(cfg.arm_reach);
-    for (int side = 0; side < 2; ++side) arm_length_[side] = s.offsets[arm_[side][1]].norm() + s.offsets[arm_[side][2]].norm();
+    for (int side = 0; side < 2; ++side) arm_length_[side] = pose::arm_length(s, arm_[side][2]);
     auto_ = features::AutoCalibration(cfg.devices, pred_.meta().standing_head_height, cfg.calibration);
     calib_.base = auto_.calibration();
     reset();
@@ -373,8 +373,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   void fit_arms(const features::n3p::TrackerSet& o, const std::array<bool, 3>& present) noexcept {
     double e[2];
     for (int side = 0; side < 2; ++side)
-      e[side] = present[1 + side] ? (o[1 + side].p - out_.world().position[arm_[side][0]]).norm() / arm_length_[side]
-                                  : std::numeric_limits<double>::quiet_NaN();
+      e[side] = pose::ArmReach::stretch(present[1 + side], o[1 + side].p, out_.world().position[arm_[side][0]], arm_length_[side]);
     if (!arm_reach_.update(e[0], e[1], 1.0 / pred_.meta().frame_rate)) return;
     fit_body();
     pose::forward_kinematics(body_, out_.pose(), out_.world());  // this frame's IK on the new arms

@@ -15,6 +15,8 @@
 #include <cmath>
 #include <limits>
 
+#include <Eigen/Core>
+
 namespace sparsebody::pose {
 
 struct ArmReachConfig {
@@ -28,6 +30,12 @@ class ArmReach {
  public:
   ArmReach() = default;
   explicit ArmReach(ArmReachConfig cfg) : cfg_(cfg) {}
+
+  // e of one side: the controller's wrist joint's distance from the shoulder over the standard arm
+  // L (pose::arm_length); NaN when the controller was not measured this frame.
+  static double stretch(bool measured, const Eigen::Vector3d& hand, const Eigen::Vector3d& shoulder, double L) noexcept {
+    return measured && L > 0 ? (hand - shoulder).norm() / L : std::numeric_limits<double>::quiet_NaN();
+  }
 
   // The arm ratio in use (from `start`, the arms the body is known to have: 1 = standard).
   double ratio() const noexcept { return ratio_; }

@@ -71,6 +71,13 @@ inline void apply_proportions(const Skeleton& standard, const JointMap& m, const
   }
 }
 
+// Upper arm + forearm of the arm that ends at `hand` (its own and its parent's offsets); 0 when
+// `hand` is not a joint below an elbow.
+inline double arm_length(const Skeleton& s, int hand) noexcept {
+  const int lower = hand > 0 && hand < s.size() ? s.parents[hand] : -1;  // the forearm's root (elbow)
+  return lower > 0 ? s.offsets[hand].norm() + s.offsets[lower].norm() : 0.0;
+}
+
 // The segment-group lengths the ratios compare (any units): leg = thigh + shin (leg_length), torso
 // = the rest distance from the hips to the head, arm = upper arm + forearm (left side).
 struct BodyLengths {
@@ -79,9 +86,7 @@ struct BodyLengths {
     BodyLengths b;
     b.leg = leg_length(s, m);
     b.torso = rest_offset(s, m[Role::Head], m[Role::Hips]).norm();
-    const int hand = m[Role::HandL];
-    const int lower = hand > 0 ? s.parents[hand] : -1;
-    b.arm = hand > 0 && lower > 0 ? s.offsets[hand].norm() + s.offsets[lower].norm() : 0;
+    b.arm = arm_length(s, m[Role::HandL]);
     return b;
   }
 };

@@ -1,12 +1,24 @@
 // Maps a skeleton's joints to body roles by name, so skeletons from different sources (the
-// training data's, CMU's, a user's rig) can be read, driven and compared. Names are matched after
-// lower-casing and dropping non-alphanumerics ("Hand_L", "LeftHand", "l_wrist" ...).
-// Python twin: weights_tool/lobstr/skeleton.py ROLE_NAMES (keep the lists equal).
+// training data's, CMU's, a user's rig) can be read, driven and compared.
+// A name is matched after normalize_joint_name: the part after its last ':' (a namespace:
+// "mixamorig:Hips"), lower case, alphanumerics only, without a rig's prefix ("Bip01 L Thigh",
+// "CC_Base_L_Thigh", "J_Bip_L_Foot", "DEF-thigh.L"). Each role has candidate names, tried in order;
+// a joint takes at most one role:
+//   1. exact: the first candidate some joint's name equals;
+//   2. for a role still without a joint, a name that ends with a candidate of 4 or more characters
+//      ("Character1_LeftUpLeg", "Armature_Hips").
+// Rigs this covers (tests/pipeline/rig_names.json): the training data's, CMU, Mixamo, LAFAN1,
+// SMPL / AMASS (its L_Ankle is the foot, its L_Foot the toe, its L_Wrist the hand: wrists and
+// ankles are tried first, and a toe role falls back to a foot name no other role took), Unreal's
+// mannequin (thigh_l, calf_l, ball_l), 3ds Max Biped, Reallusion CC, VRM, Blender (thigh.L).
+// Python twin: weights_tool/lobstr/skeleton.py ROLE_NAMES, RIG_PREFIXES, map_roles (keep them equal).
 #pragma once
 #include <array>
 #include <cctype>
+#include <cstring>
 #include <initializer_list>
 #include <string>
+#include <vector>
 
 #include "sparsebody/core/error.hpp"
 #include "sparsebody/pose/skeleton.hpp"
@@ -23,9 +35,17 @@ inline const char* role_name(Role r) noexcept {
 }
 
 inline std::string normalize_joint_name(const std::string& s) {
+  const std::size_t colon = s.rfind(':');
   std::string o;
-  for (char c : s)
-    if (std::isalnum(static_cast<unsigned char>(c))) o.push_back(static_cast<char>(std::tolower(static_cast<unsigned char>(c))));
+  for (std::size_t i = colon == std::string::npos ? 0 : colon + 1; i < s.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(s[i]);
+    if (std::isalnum(c)) o.push_back(static_cast<char>(std::tolower(c)));
+  }
+  // a rig's prefix (the longer of two that share a start comes first)
+  for (const char* p : {"bip001", "bip01", "ccbase", "jbipc", "jbip", "def"}) {
+    const std::size_t n = std::strlen(p);
+    if (o.size() > n && o.compare(0, n, p) == 0) return o.substr(n);
+  }
   return o;
 }
 
@@ -37,30 +57,42 @@ struct JointMap {
   static JointMap from_names(const Skeleton& s, const std::string& source) {
     static const std::initializer_list<const char*> names[kRoleCount] = {
         {"hips", "pelvis", "hip"},
-        {"spine", "lowerback", "spine1", "abdomen", "waist"},
+        {"spine", "lowerback", "spine1", "spine01", "abdomen", "waist"},
         {"head"},
-        {"handl", "lefthand", "lhand", "lwrist", "leftwrist"},
-        {"handr", "righthand", "rhand", "rwrist", "rightwrist"},
-        {"upperlegl", "leftupleg", "lthigh", "leftthigh", "leftupperleg", "lhip", "lefthip"},
-        {"upperlegr", "rightupleg", "rthigh", "rightthigh", "rightupperleg", "rhip", "righthip"},
-        {"lowerlegl", "leftleg", "lshin", "leftshin", "leftlowerleg", "lknee", "leftknee"},
-        {"lowerlegr", "rightleg", "rshin", "rightshin", "rightlowerleg", "rknee", "rightknee"},
-        {"footl", "leftfoot", "lfoot", "lankle", "leftankle"},
-        {"footr", "rightfoot", "rfoot", "rankle", "rightankle"},
-        {"toesl", "lefttoebase", "lefttoe", "ltoe", "ltoes", "lefttoes"},
-        {"toesr", "righttoebase", "righttoe", "rtoe", "rtoes", "righttoes"}};
+        {"lwrist", "leftwrist", "wristl", "handl", "lefthand", "lhand"},
+        {"rwrist", "rightwrist", "wristr", "handr", "righthand", "rhand"},
+        {"upperlegl", "leftupleg", "lthigh", "leftthigh", "thighl", "leftupperleg", "lupperleg", "lhip", "lefthip"},
+        {"upperlegr", "rightupleg", "rthigh", "rightthigh", "thighr", "rightupperleg", "rupperleg", "rhip", "righthip"},
+        {"lowerlegl", "leftleg", "lshin", "leftshin", "shinl", "leftlowerleg", "llowerleg", "lcalf", "calfl", "lknee", "leftknee"},
+        {"lowerlegr", "rightleg", "rshin", "rightshin", "shinr", "rightlowerleg", "rlowerleg", "rcalf", "calfr", "rknee", "rightknee"},
+        {"lankle", "leftankle", "anklel", "footl", "leftfoot", "lfoot"},
+        {"rankle", "rightankle", "ankler", "footr", "rightfoot", "rfoot"},
+        {"toesl", "lefttoebase", "lefttoe", "ltoe", "ltoes", "lefttoes", "ltoebase", "toel", "ltoe0", "balll", "footl", "leftfoot", "lfoot"},
+        {"toesr", "righttoebase", "righttoe", "rtoe", "rtoes", "righttoes", "rtoebase", "toer", "rtoe0", "ballr", "footr", "rightfoot", "rfoot"}};
+    std::vector<std::string> norm(static_cast<std::size_t>(s.size()));
+    for (int j = 0; j < s.size(); ++j) norm[static_cast<std::size_t>(j)] = normalize_joint_name(s.names[j]);
+    std::vector<char> taken(norm.size(), 0);
     JointMap m;
+    m.joint.fill(-1);
+    auto ends_with = [](const std::string& a, const std::string& b) {
+      return a.size() >= b.size() && a.compare(a.size() - b.size(), b.size(), b) == 0;
+    };
+    for (const bool suffix : {false, true})
+      for (int r = 0; r < kRoleCount; ++r)
+        for (const char* cand : names[r]) {
+          if (m.joint[r] >= 0) break;
+          const std::string c = cand;
+          if (suffix && c.size() < 4) continue;
+          for (std::size_t j = 0; j < norm.size() && m.joint[r] < 0; ++j)
+            if (!taken[j] && (suffix ? ends_with(norm[j], c) : norm[j] == c)) {
+              m.joint[r] = static_cast<int>(j);
+              taken[j] = 1;
+            }
+        }
     std::string missing;
-    for (int r = 0; r < kRoleCount; ++r) {
-      m.joint[r] = -1;
-      for (const char* cand : names[r]) {
-        for (int j = 0; j < s.size() && m.joint[r] < 0; ++j)
-          if (normalize_joint_name(s.names[j]) == cand) m.joint[r] = j;
-        if (m.joint[r] >= 0) break;
-      }
+    for (int r = 0; r < kRoleCount; ++r)
       if (m.joint[r] < 0 && r != static_cast<int>(Role::Spine))
         missing += (missing.empty() ? "" : ", ") + std::string(role_name(static_cast<Role>(r)));
-    }
     if (!missing.empty()) throw LoadError(source, "cannot map joints by name: no joint for " + missing);
     return m;
   }
