@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "sparsebody/recordings/bvh_up_axis.hpp"
 #include "sparsebody/recordings/tracker_csv.hpp"
 #include "sparsebody/recordings/tracker_synthesis.hpp"
 
@@ -26,6 +27,7 @@ void read_bvh(const Options& o, Input& in) {
     std::printf("stand   the clip's frame at %.2f s held for 2.5 s (--devices-stand): a standing window\n", o.devices_stand);
   }
   const pose::JointMap map = pose::JointMap::from_names(in.clip.skeleton, o.input);
+  const recordings::UpAxis up = recordings::make_y_up(in.clip, map);
   const double units = recordings::guess_units(in.clip.skeleton, map);
   recordings::SyntheticTrackers syn;
   if (o.devices) {  // what a headset session of this motion would record: calibrated automatically
@@ -48,6 +50,9 @@ void read_bvh(const Options& o, Input& in) {
   in.fps = o.devices ? 72.0 : 1.0 / in.clip.frame_time;
   std::printf("input   %s: %d frames at %.1f fps, %d joints, units %.4g m, leg %.3f m\n", o.input.c_str(), in.clip.frames,
               1.0 / in.clip.frame_time, in.clip.skeleton.size(), units, syn.leg);
+  if (up.turned)
+    std::printf("up      the file's world is %c%c-up (hips -> head nearest that axis on %.0f %% of frames): turned to +Y\n",
+                up.sign > 0 ? '+' : '-', up.name(), 100.0 * up.share);
   if (o.devices)
     std::printf("devices %zu device frames at 72 Hz: headset at the eyes, grips off the wrists, OpenXR orientations%s\n",
                 in.frames.size(), o.device_seed > 0 ? ", per-session perturbation, 2 ms jitter, short losses" : "");

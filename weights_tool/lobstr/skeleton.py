@@ -136,6 +136,37 @@ def unit_scale(b, roles):
     return 0.85 / leg
 
 
+def up_axis_turn(b, roles, R_local, t_local, min_share=0.7):
+    """The rotation [3, 3] that turns a clip whose world is not Y-up (AMASS / SMPL exports, Z-up
+    scenes) to +Y, or None: on up to 240 frames spread over the clip, the signed axis nearest to
+    the hips -> head direction; when one other than +Y holds at least min_share of them, the shortest
+    rotation from it to +Y (a half turn about X for -Y). Twin of recordings/bvh_up_axis.hpp."""
+    F = R_local.shape[0]
+    n = min(F, 240)
+    if n <= 0:
+        return None
+    f = (np.arange(n) * (F - 1)) // (n - 1) if n > 1 else np.zeros(1, dtype=int)
+    _, pw = bvh.fk(b.parents, R_local[f], t_local[f])
+    d = pw[:, roles["head"]] - pw[:, roles["hips"]]
+    d = d[np.isfinite(d).all(axis=1) & (np.einsum("ij,ij->i", d, d) > 0)]
+    if len(d) == 0:
+        return None
+    a = np.abs(d).argmax(axis=1)
+    k = 2 * a + (d[np.arange(len(d)), a] < 0)
+    votes = np.bincount(k, minlength=6)
+    best = int(votes.argmax())
+    if best == 2 or votes[best] < min_share * len(d):
+        return None
+    if best == 3:
+        return np.diag([1.0, -1.0, -1.0])
+    u = np.zeros(3)
+    u[best // 2] = 1.0 if best % 2 == 0 else -1.0
+    axis = np.cross(u, [0.0, 1.0, 0.0])
+    axis /= np.linalg.norm(axis)
+    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + K + K @ K  # 90 deg about u x Y (Rodrigues, sin = 1, 1 - cos = 1)
+
+
 class Clip:
     """A BVH clip in metres with its roles, world transforms and local rotations."""
 
@@ -145,6 +176,12 @@ class Clip:
         self.units = units if units is not None else unit_scale(b, self.roles)
         R, t = bvh.local_transforms(b)
         t = t * self.units
+        T = up_axis_turn(b, self.roles, R, t)
+        if T is not None:  # the file's world is not Y-up: the roots' rotations and positions turned
+            roots = [j for j, p in enumerate(b.parents) if p < 0]
+            R[:, roots] = T @ R[:, roots]
+            t[:, roots] = t[:, roots] @ T.T
+        self.up_turn = T
         self.R_local, self.t_local = R, t
         self.Rw, self.pw = bvh.fk(b.parents, R, t)
         self.fps = 1.0 / b.frame_time

@@ -35,6 +35,7 @@
 #include "sparsebody/io/weights_json.hpp"
 #include "sparsebody/nn/storage.hpp"
 #include "sparsebody/recordings/bvh.hpp"
+#include "sparsebody/recordings/bvh_up_axis.hpp"
 #include "sparsebody/recordings/tracker_csv.hpp"
 #include "sparsebody/recordings/tracker_synthesis.hpp"
 
@@ -400,6 +401,7 @@ py::dict read_input(const std::string& path, bool devices, unsigned device_seed,
     recordings::BvhClip clip = recordings::read_bvh(path);
     if (devices_stand >= 0) clip = recordings::with_held_frame(std::move(clip), devices_stand, 2.5);
     const pose::JointMap map = pose::JointMap::from_names(clip.skeleton, path);
+    recordings::make_y_up(clip, map);
     const double units = recordings::guess_units(clip.skeleton, map);
     recordings::SyntheticTrackers syn;
     if (devices) {

@@ -35,6 +35,9 @@ struct BvhClip {
   int frames = 0;
   int channel_count = 0;
   std::vector<double> motion;                       // frames x channel_count
+  // The world as read, turned by this (the root's rotation and position): a file whose world is not
+  // Y-up reads as if it were (recordings/bvh_up_axis.hpp sets it; identity: the file's world).
+  Eigen::Quaterniond world_turn = Eigen::Quaterniond::Identity();
 
   const double* frame(int f) const noexcept { return motion.data() + static_cast<std::size_t>(f) * channel_count; }
 
@@ -56,6 +59,10 @@ struct BvhClip {
           case BvhChannel::Yrotation: q = q * Eigen::AngleAxisd(x * M_PI / 180.0, Eigen::Vector3d::UnitY()); break;
           case BvhChannel::Zrotation: q = q * Eigen::AngleAxisd(x * M_PI / 180.0, Eigen::Vector3d::UnitZ()); break;
         }
+      }
+      if (skeleton.parents[j] < 0 && world_turn.w() != 1.0) {
+        q = world_turn * q;
+        t = world_turn * t;
       }
       out.local[j] = q;
       translation[j] = t;
