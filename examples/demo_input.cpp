@@ -59,10 +59,14 @@ void read_bvh(const Options& o, Input& in) {
 }
 
 void read_csv(const Options& o, Input& in) {
-  in.frames = recordings::read_tracker_csv(o.input);
+  recordings::TrackerCsvInfo info;
+  in.frames = recordings::read_tracker_csv(o.input, &info);
   if (in.frames.empty()) throw std::runtime_error(o.input + ": no frames");
   in.fps = in.frames.size() > 1 ? (in.frames.size() - 1) / (in.frames.back().time - in.frames.front().time) : 30;
   std::printf("input   %s: %zu tracker frames (~%.1f fps)\n", o.input.c_str(), in.frames.size(), in.fps);
+  if (info.to_seconds != 1.0)
+    std::printf("time    the time column is in %s (median frame interval %.2f ms): converted to seconds\n", info.time_unit,
+                1e3 * info.median_interval);
 }
 
 void write_trackers(const Options& o, const Input& in) {

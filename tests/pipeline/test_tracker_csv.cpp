@@ -1,6 +1,7 @@
 // Tracker CSV: round trip, and malformed input reported with line numbers.
 #include <doctest/doctest.h>
 
+#include <iomanip>
 #include <sstream>
 
 #include "sparsebody/recordings/tracker_csv.hpp"
@@ -84,4 +85,89 @@ TEST_CASE("tracker CSV errors name the line and the field") {
   std::istringstream in(s);
   const auto v = recordings::parse_tracker_csv(in, "x.csv");
   CHECK(std::isnan(v.back().pose[0].position.x));
+}
+
+TEST_CASE("tracker CSV as recorders write it: columns in any order, no pelvis columns, time in ms / us / ns") {
+  const auto want = sample();
+  std::ostringstream out;
+  recordings::write_tracker_csv(out, want);
+  // the columns reversed and the pelvis's left out
+  std::vector<std::string> header, rows[3];
+  {
+    std::istringstream in(out.str());
+    std::string line;
+    int r = -1;
+    while (std::getline(in, line)) {
+      if (line.empty() || line[0] == '#') continue;
+      std::vector<std::string> cells;
+      std::stringstream ls(line);
+      std::string c;
+      while (std::getline(ls, c, ',')) cells.push_back(c);
+      cells.resize(cells.size() - 8);  // no pelvis
+      (r < 0 ? header : rows[r]) = std::vector<std::string>(cells.rbegin(), cells.rend());
+      ++r;
+    }
+  }
+  auto join = [](const std::vector<std::string>& v) {
+    std::string s;
+    for (const auto& c : v) s += (s.empty() ? "" : ",") + c;
+    return s + "\n";
+  };
+  std::string csv = join(header);
+  for (const auto& r : rows) csv += join(r);
+  std::istringstream in(csv);
+  recordings::TrackerCsvInfo info;
+  const auto got = recordings::parse_tracker_csv(in, "reordered.csv", &info);
+  REQUIRE(got.size() == want.size());
+  CHECK_FALSE(info.pelvis_columns);
+  CHECK(std::string(info.time_unit) == "s");
+  for (std::size_t i = 0; i < want.size(); ++i) {
+    CHECK(got[i].time == want[i].time);
+    for (int k = 0; k < 3; ++k) {
+      CHECK(got[i].pose[k].position.y == want[i].pose[k].position.y);
+      CHECK(got[i].pose[k].orientation.w == want[i].pose[k].orientation.w);
+      CHECK(got[i].valid[k] == want[i].valid[k]);
+    }
+    CHECK_FALSE(got[i].valid[3]);
+    CHECK(got[i].pose[3].orientation.w == 1.0f);
+  }
+  // header errors name the column
+  const std::string h = recordings::tracker_csv_header();
+  CHECK(error_of(h.substr(0, h.find(",pelvis_px")) + ",pelvis_px\n").find("no column 'pelvis_py' (a pelvis tracker needs all 8") != std::string::npos);
+  CHECK(error_of(h.substr(h.find(",") + 1) + "\n").find("no column 'time'") != std::string::npos);
+  CHECK(error_of(h + ",head_px\n").find("column 'head_px' appears twice") != std::string::npos);
+  CHECK(error_of(h + ",battery\n").find("unknown column 'battery'") != std::string::npos);
+  // time units: 72 Hz in seconds, ms, us and ns (an XrTime-like origin), and a slow seconds stream
+  struct Unit { const char* name; double factor, origin; };
+  for (const Unit u : {Unit{"s", 1.0, 12.5}, Unit{"ms", 1e3, 0.0}, Unit{"us", 1e6, 5e6}, Unit{"ns", 1e9, 1.7e18}}) {
+    CAPTURE(u.name);
+    std::string s = h + "\n";
+    for (int i = 0; i < 200; ++i) {
+      std::ostringstream row;
+      row << std::setprecision(17) << u.origin + u.factor * (i / 72.0);
+      for (int c = 0; c < 32; ++c) row << (c % 8 == 6 || c % 8 == 7 ? ",1" : ",0");
+      s += row.str() + "\n";
+    }
+    std::istringstream is(s);
+    recordings::TrackerCsvInfo ti;
+    const auto v = recordings::parse_tracker_csv(is, "t.csv", &ti);
+    CHECK(std::string(ti.time_unit) == u.name);
+    CHECK(ti.median_interval == doctest::Approx(1.0 / 72).epsilon(1e-3));
+    const double t0 = u.factor == 1.0 ? u.origin : 0.0;  // seconds are kept as recorded
+    CHECK(v[199].time - v[0].time == doctest::Approx(199 / 72.0).epsilon(1e-6));
+    CHECK(v[0].time == doctest::Approx(t0));
+  }
+  {
+    std::string s = h + "\n";  // 1 Hz in seconds stays seconds
+    for (int i = 0; i < 5; ++i) {
+      s += std::to_string(i);
+      for (int c = 0; c < 32; ++c) s += (c % 8 == 6 || c % 8 == 7) ? ",1" : ",0";
+      s += "\n";
+    }
+    std::istringstream is(s);
+    recordings::TrackerCsvInfo ti;
+    const auto v = recordings::parse_tracker_csv(is, "slow.csv", &ti);
+    CHECK(std::string(ti.time_unit) == "s");
+    CHECK(v[4].time == 4.0);
+  }
 }
