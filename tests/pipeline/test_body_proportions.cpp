@@ -166,10 +166,15 @@ TEST_CASE("arm reach: raised to the least stretch of a run held for hold_time; g
     }
     CHECK(a.ratio() == 1.0);
   }
-  SUBCASE("held to 1 + limit; reset forgets; disabled never raises") {
+  SUBCASE("held to 1 + limit; a controller further than any arm is not held; reset forgets; disabled never raises") {
     pose::ArmReach a(cfg);
-    for (int i = 0; i < 30; ++i) a.update(1.5, 1.5, dt);
+    for (int i = 0; i < 30; ++i) a.update(1.2, 1.2, dt);
     CHECK(a.ratio() == doctest::Approx(1.12));
+    a.reset();
+    for (int i = 0; i < 90; ++i) CHECK_FALSE(a.update(1.5, 2.5, dt));  // both put down beyond 1.32
+    CHECK(a.ratio() == 1.0);
+    for (int i = 0; i < 6; ++i) a.update(2.5, 1.05, dt);  // one put down, the other stretched
+    CHECK(a.ratio() == doctest::Approx(1.05));
     a.reset();
     CHECK(a.ratio() == 1.0);
     a.reset(0.9);  // from shorter arms an application gave: lengthened from there
@@ -221,6 +226,12 @@ TEST_CASE("LoBSTr pipeline: controllers held beyond the standard arm's reach len
   sparsebody_test::reach_out(frames, 1.0, 0.56, 72.0);
   for (const auto& f : frames) q.push(f);
   CHECK(q.body_proportions().arm > 1.03);  // at 72 Hz as well
+  // controllers put down 1.2 m in front (on a table): no arm is that long, the arms stay standard
+  Compact r(compact());
+  frames = sparsebody_test::session({{Phase::Stand, 3.0, eye}}, 72.0);
+  sparsebody_test::reach_out(frames, 3.0, 1.2, 72.0);
+  for (const auto& f : frames) r.push(f);
+  CHECK(r.body_proportions().arm == 1.0);
   // recalibrate(): a new user, the standard arms until they are seen again
   q.recalibrate();
   CHECK(q.body_proportions().arm == 1.0);

@@ -9,7 +9,8 @@
 // reaches every controller (its elbow bends more than the user's), and a relaxed arm is not
 // straight enough to measure from: on validation device sessions an unknown grip offset (5-12 cm)
 // moves e by ~6 %, as much as arms differ. The run's least e, and the hold, keep a tracking glitch,
-// a single stretched frame or a grip held far out from raising it for good. No allocation.
+// a single stretched frame or a grip held far out from raising it for good; a controller further
+// than any arm (1 + limit + not_held) is not held and does not count. No allocation.
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -24,6 +25,10 @@ struct ArmReachConfig {
   double margin = 0.01;     // beyond the reach in use, relative to the standard arm
   double hold_time = 0.2;   // s, seen that far out on consecutive measured frames
   double limit = 0.12;      // the ratio stays within 1 + limit (the training bodies' arms: +-8 %)
+  // A controller further out than 1 + limit + not_held is not in a hand (put down on a table,
+  // dropped, a tracking jump): that side's frame is no evidence of a long arm. 1.32: at 1.22, some of
+  // the CMU clips' flung arms (trackers at the joints) stopped counting (LoBSTr +0.02 cm there).
+  double not_held = 0.2;
 };
 
 class ArmReach {
@@ -48,7 +53,9 @@ class ArmReach {
   // True when the ratio changed.
   bool update(double e_left, double e_right, double dt) noexcept {
     if (!cfg_.enabled) return false;
-    const double e = std::max(std::isfinite(e_left) ? e_left : 0.0, std::isfinite(e_right) ? e_right : 0.0);
+    const double held = 1.0 + cfg_.limit + cfg_.not_held;
+    auto in_hand = [&](double x) { return std::isfinite(x) && x <= held ? x : 0.0; };
+    const double e = std::max(in_hand(e_left), in_hand(e_right));
     if (!(e > ratio_ + cfg_.margin) || !(dt > 0)) {
       end_run();
       return false;
