@@ -68,14 +68,16 @@ void print_calibration(const Options& o, const Input& in, const Pipeline& pipe) 
   if (in.at_joints || o.calibration_forced) return;
   const f::CalibrationReport& r = pipe.calibration_report();
   if (r.status == f::CalibrationStatus::Calibrated) {
-    std::printf("calib   automatic%s: standing at frames %ld-%ld (%.1f-%.1f s), stature %.2f m, confidence %.2f",
+    std::printf("calib   automatic%s: standing at frames %ld-%ld (%.1f-%.1f s), stature %.2f m%s, confidence %.2f",
                 r.provisional ? " (provisional: no full 1 s stand yet)" : "", frame_at(in, r.first_time),
                 frame_at(in, r.last_time), r.first_time - in.frames.front().time, r.last_time - in.frames.front().time, r.stature,
-                r.confidence);
+                r.floor_estimated ? " (assumed)" : "", r.confidence);
     if (r.windows > 1) std::printf(", %d windows averaged", r.windows);
     if (r.skipped > 0) std::printf(", %d lower (sitting?) not used", r.skipped);
     if (r.refused > 0) std::printf(", %d implausible not used", r.refused);
-    if (r.floor_estimated) std::printf(", floor estimated at y = %.2f m", r.floor);
+    if (r.floor_estimated)
+      std::printf(", floor estimated at y = %.2f m%s", r.floor,
+                  r.floor_not_at_zero ? " (the standing eye height is below 0.5 m: y = 0 is not the floor)" : "");
     std::printf("\n");
     const sparsebody::pose::BodyProportions& b = pipe.body_proportions();
     if (!b.standard())  // LoBSTr with a pelvis tracker (avatar/lobstr_pipeline.hpp fit_body)

@@ -435,6 +435,39 @@ TEST_CASE("auto calibration: estimate_floor puts the floor under the standing ey
   CHECK(std::string(r.message).find("floor estimated") != std::string::npos);
 }
 
+TEST_CASE("auto calibration: a standing eye height below 0.5 m means y = 0 is not the floor (OpenXR LOCAL space): estimated") {
+  for (const double y0 : {0.0, -0.3, 0.45, 0.6}) {
+    CAPTURE(y0);
+    Feeder f;
+    auto s = sparsebody_test::session({{Phase::Stand, 2.0, 1.62}, {Phase::Walk, 1.0, 1.62}});
+    for (auto& fr : s)
+      for (auto& p : fr.pose) p.position.y += static_cast<float>(y0 - 1.62);  // the head starts at y = y0
+    f.feed(s);
+    const auto& r = f.r();
+    if (y0 >= 0.5) {  // eyes at 0.6 m: a plausible floor that gives an implausible stature, refused as before
+      CHECK(r.status == features::CalibrationStatus::Refused);
+      CHECK_FALSE(r.floor_estimated);
+      continue;
+    }
+    REQUIRE(r.status == features::CalibrationStatus::Calibrated);
+    CHECK(r.floor_estimated);
+    CHECK(r.floor == doctest::Approx(y0 - 0.936 * 1.70).epsilon(0.002).scale(0));
+    CHECK(r.stature == doctest::Approx(1.70));
+    CHECK(std::string(r.message).find("y = 0 is not the floor") != std::string::npos);
+    // a later stand on the same estimated floor refines it; recalibrate() trusts y = 0 again
+    f.cal.recalibrate();
+    CHECK_FALSE(f.r().floor_estimated);
+  }
+  features::AutoCalibrationConfig off;
+  off.floor_fallback_eye = 0;
+  Feeder g(off);
+  auto s = sparsebody_test::session({{Phase::Stand, 2.0, 1.62}, {Phase::Walk, 1.0, 1.62}});
+  for (auto& fr : s)
+    for (auto& p : fr.pose) p.position.y -= 1.62f;
+  g.feed(s);
+  CHECK(g.r().status == features::CalibrationStatus::Refused);  // as before, when turned off
+}
+
 TEST_CASE("LoBSTr pipeline: automatic by default, the calibration change restarts the feature history") {
   using P = avatar::LoBSTrPipeline<float, 32, 16>;
   static auto w = P::load(std::string(SPARSEBODY_SOURCE_DIR) + "/tests/pipeline/golden/lobstr_pipeline_small.weights.json");

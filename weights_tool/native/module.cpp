@@ -118,6 +118,7 @@ py::dict report_dict(const features::CalibrationReport& r) {
   d["first_time"] = r.first_time, d["last_time"] = r.last_time;
   d["stature"] = r.stature, d["eye_height"] = r.eye_height, d["scale"] = r.scale, d["floor"] = r.floor;
   d["confidence"] = r.confidence, d["floor_estimated"] = r.floor_estimated, d["provisional"] = r.provisional;
+  d["floor_not_at_zero"] = r.floor_not_at_zero;
   d["windows"] = r.windows, d["replaced"] = r.replaced, d["raised"] = r.raised, d["skipped"] = r.skipped, d["refused"] = r.refused;
   d["message"] = std::string(r.message);
   return d;

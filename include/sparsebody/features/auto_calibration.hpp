@@ -38,7 +38,11 @@
 // stood). A seated or short user keeps the default body until they stand.
 // Floor: the reference space's y = 0 (OpenXR STAGE). estimate_floor, for apps whose floor is not
 // reliable: the stature cannot be seen then, so it is assumed (assumed_stature, 1.70 m) and the
-// floor is put 0.936 x 1.70 m below the accepted standing eye height; the report says so.
+// floor is put 0.936 x 1.70 m below the accepted standing eye height; the report says so. The same
+// happens by itself (until recalibrate()) when a standing window's eye height is below
+// floor_fallback_eye (0.5 m): nobody stands with their eyes that low, so y = 0 is not the floor (an
+// OpenXR LOCAL space has y = 0 at the head's starting height); before, that window was refused and
+// the session ran the default body with its head at the floor.
 // push() returns true when calibration() changed: the pipeline then restarts its feature
 // history (like a reset), so the change gives no velocity spike. No allocation, no exception;
 // NaN or invalid frames simply break a window.
@@ -81,6 +85,7 @@ struct AutoCalibrationConfig {
   double agreement = 0.04;             // m of eye height: same stand (average) / higher (replace) / lower (skip)
   bool estimate_floor = false;         // floor from the standing eye height (stature assumed)
   double assumed_stature = 1.70;       // m, with estimate_floor
+  double floor_fallback_eye = 0.5;     // m: a standing eye height below this turns estimate_floor on (0: never)
   bool size_from_headset = true;       // the default body no smaller than the first upright headset frame shows (not with estimate_floor)
   // A bent stand: the headset of a walking user stays more than `rise_margin` above the automatic
   // estimate's eye height for `rise_time` s: the estimate is raised to the lowest height of that
@@ -131,6 +136,7 @@ class AutoCalibration {
   // user sat down, or handed the headset on.
   void recalibrate() noexcept {
     manual_ = false;
+    floor_fallback_ = false;
     est_n_ = 0;
     provisional_ = prov_open_ = false;
     sized_ = false;
@@ -245,7 +251,7 @@ class AutoCalibration {
   // eye height when that is above the default's (and the stature plausible). True when that
   // changed calibration(). Done once per search (recalibrate() allows it again).
   bool size_from_headset(const Poses& pose, const Flags& valid) noexcept {
-    if (!cfg_.size_from_headset || cfg_.estimate_floor || est_n_ > 0 || report_.status != CalibrationStatus::Default) {
+    if (!cfg_.size_from_headset || floor_estimated() || est_n_ > 0 || report_.status != CalibrationStatus::Default) {
       sized_ = true;
       return false;
     }
@@ -296,7 +302,7 @@ class AutoCalibration {
 
   // v: the headset's velocity (head_velocity()).
   bool rise(double time, const Poses& pose, const Flags& valid, const Eigen::Vector3d& v) noexcept {
-    const bool ok = cfg_.rise_margin > 0 && est_n_ > 0 && !cfg_.estimate_floor && !qualified_ &&
+    const bool ok = cfg_.rise_margin > 0 && est_n_ > 0 && !floor_estimated() && !qualified_ &&
                     report_.status == CalibrationStatus::Calibrated &&
                     upright(pose[0].orientation.normalized().toRotationMatrix()) &&
                     pose[0].position.y() > est_eye_ + cfg_.rise_margin &&
@@ -491,7 +497,10 @@ class AutoCalibration {
     const double mean_speed = sum / n, range = hi - lo;
     const double stillness = std::clamp(1 - 0.5 * mean_speed / cfg_.mean_head_speed - 0.5 * range / cfg_.head_height_range, 0.0, 1.0);
     const double quality = 0.5 * std::min(1.0, duration / cfg_.max_window) + 0.5 * stillness;
-    const double stature = cfg_.estimate_floor ? cfg_.assumed_stature : eye_raw / cfg_.eye_height_ratio;
+    // y = 0 is not the floor (no estimate yet, and eyes this low are nobody's standing): estimate it
+    if (!floor_estimated() && est_n_ == 0 && !provisional_ && cfg_.floor_fallback_eye > 0 && eye_raw < cfg_.floor_fallback_eye)
+      floor_fallback_ = true;
+    const double stature = floor_estimated() ? cfg_.assumed_stature : eye_raw / cfg_.eye_height_ratio;
     // A full window replaces a provisional estimate (unless lower: sitting), and its own window
     // keeps the provisional orientation offsets when the height agrees: the same stand, so only the
     // size moves, by a refinement.
@@ -549,7 +558,7 @@ class AutoCalibration {
       est_hi_ = std::max(est_hi_, eye_raw);
       ++est_n_;
     }
-    calib_.floor = cfg_.estimate_floor ? est_eye_ - cfg_.eye_height_ratio * cfg_.assumed_stature : 0.0;
+    calib_.floor = floor_estimated() ? est_eye_ - cfg_.eye_height_ratio * cfg_.assumed_stature : 0.0;
     const double eye = est_eye_ - calib_.floor;
     calib_.scale = scale_of_eye(eye);
     if (std::isfinite(best_score[3])) calib_.set_pelvis_height(at(best[3]).pelvis_y, standard_hips_, devices_);
@@ -564,7 +573,8 @@ class AutoCalibration {
     r.stature = eye / cfg_.eye_height_ratio;
     r.scale = calib_.scale;
     r.floor = calib_.floor;
-    r.floor_estimated = cfg_.estimate_floor;
+    r.floor_estimated = floor_estimated();
+    r.floor_not_at_zero = floor_fallback_ && !cfg_.estimate_floor;
     r.confidence = std::clamp(est_quality_ * (0.7 + 0.3 * agree), 0.0, 1.0);
     r.windows = est_n_;
     r.provisional = provisional_;
@@ -584,16 +594,20 @@ class AutoCalibration {
     if (r.skipped || r.refused)
       std::snprintf(extra, sizeof extra, "; not used: %d lower (sitting?), %d implausible", r.skipped, r.refused);
     if (r.floor_estimated)
-      std::snprintf(r.message, sizeof r.message, "automatic: standing at %.1f-%.1f s, floor estimated at y = %.2f m (stature assumed %.2f m), %d window%s%s",
-                    r.first_time, r.last_time, r.floor, r.stature, r.windows, r.windows == 1 ? "" : "s", extra);
+      std::snprintf(r.message, sizeof r.message, "automatic: standing at %.1f-%.1f s, floor estimated at y = %.2f m%s (stature assumed %.2f m), %d window%s%s",
+                    r.first_time, r.last_time, r.floor, r.floor_not_at_zero ? ", y = 0 is not the floor" : "",
+                    r.stature, r.windows, r.windows == 1 ? "" : "s", extra);
     else
       std::snprintf(r.message, sizeof r.message, "automatic%s: standing at %.1f-%.1f s, stature %.2f m, confidence %.2f, %d window%s%s",
                     r.provisional ? " (provisional)" : "", r.first_time, r.last_time, r.stature,
                     r.confidence, r.windows, r.windows == 1 ? "" : "s", extra);
   }
 
+  bool floor_estimated() const noexcept { return cfg_.estimate_floor || floor_fallback_; }
+
   AutoCalibrationConfig cfg_;
   DeviceModel devices_;
+  bool floor_fallback_ = false;  // y = 0 was found not to be the floor (floor_fallback_eye)
   double standard_head_ = 1.38;
   double standard_hips_ = 0;
   bool manual_ = false;

@@ -33,6 +33,8 @@ struct CalibrationReport {
   double floor = 0;       // world y of the floor used
   double confidence = 0;  // [0, 1]: window length, stillness, agreement between windows
   bool floor_estimated = false;  // AutoCalibrationConfig::estimate_floor: stature assumed
+  // ... because a standing eye height was below floor_fallback_eye: y = 0 is not the floor
+  bool floor_not_at_zero = false;
   int windows = 0;   // standing windows in the estimate (averaged)
   int replaced = 0;  // estimates replaced by a window more than 4 cm higher
   int raised = 0;    // estimates raised: the headset stayed above a bent stand's height (AutoCalibration::rise)
