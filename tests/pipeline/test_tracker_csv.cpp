@@ -158,6 +158,17 @@ TEST_CASE("tracker CSV as recorders write it: columns in any order, no pelvis co
     CHECK(v[0].time == doctest::Approx(t0));
   }
   {
+    // a UTF-8 byte order mark (Excel, some .NET writers) and spaces around the fields
+    std::string s = "\xEF\xBB\xBF" + h + "\n 0.5 ";
+    for (int c = 0; c < 32; ++c) s += (c % 8 == 6 || c % 8 == 7) ? ", 1" : " , 0.25 ";
+    std::istringstream is(s + "\n");
+    const auto v = recordings::parse_tracker_csv(is, "bom.csv");
+    REQUIRE(v.size() == 1);
+    CHECK(v[0].time == 0.5);
+    CHECK(v[0].pose[2].position.z == 0.25f);
+    CHECK(v[0].valid[3]);
+  }
+  {
     std::string s = h + "\n";  // 1 Hz in seconds stays seconds
     for (int i = 0; i < 5; ++i) {
       s += std::to_string(i);

@@ -10,6 +10,7 @@
 // orientation x y z w, valid (0 or 1). Pose values may be nan/inf (recorded glitches, handled by
 // the pipeline's sanitizer); time and valid may not.
 // What a recorder may do differently, read all the same:
+//   - a UTF-8 byte order mark, spaces around fields;
 //   - columns in any order (the header names them); a session without a pelvis tracker may leave
 //     out the 8 pelvis columns (pelvis invalid in every frame). An unknown, repeated or missing
 //     column is an error that names it.
@@ -104,6 +105,7 @@ inline std::vector<trackers::TrackerFrame> parse_tracker_csv(std::istream& in, c
   while (std::getline(in, line)) {
     ++n;
     if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (n == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // a UTF-8 byte order mark
     if (line.empty() || line[0] == '#') continue;
     if (!have_header) {
       // the header: every column named once; time, head and both hands required, the pelvis all or none
@@ -137,7 +139,7 @@ inline std::vector<trackers::TrackerFrame> parse_tracker_csv(std::istream& in, c
     std::size_t pos = 0;
     while (true) {
       const std::size_t comma = line.find(',', pos);
-      const std::string tok = line.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+      const std::string tok = trim(line.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos));
       if (f >= columns) fail("expected " + std::to_string(columns) + " comma-separated fields, got more");
       char* end = nullptr;
       const double x = std::strtod(tok.c_str(), &end);
