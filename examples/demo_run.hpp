@@ -154,6 +154,9 @@ std::optional<Metrics> stream(const Options& o, Input& in, Pipeline& pipe, Shown
               fps);
   std::printf("speed   %.1f us per model step (whole pipeline, this run, including resampling)\n",
               1e6 * step_seconds / std::max(1L, steps));
+  if (pipe.recentres() > 0)
+    std::printf("recentre %d recentred tracking space%s (every tracker turned / shifted together between two frames): the model "
+                "restarted there\n", pipe.recentres(), pipe.recentres() == 1 ? "" : "s");
   print_calibration(o, in, pipe);
   if (viewer) {
     nlohmann::json info = {{"input", o.input}, {"model", in.model}, {"fps", fps}, {"user_scale", pipe.user_scale()},

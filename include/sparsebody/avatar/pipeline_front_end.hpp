@@ -40,6 +40,9 @@ class PipelineFrontEnd {
   long long frames() const noexcept { return frames_; }  // model frames stepped since the last reset
   // The resampler and sanitizer (last_sanitized().reset: the last tick restarted the model).
   const trackers::TrackerStream& tracker_stream() const noexcept { return stream_; }
+  // Recentred tracking spaces found in the input so far (trackers/recenter.hpp: each one restarted
+  // the model at that frame).
+  int recentres() const noexcept { return stream_.recentres(); }
 
  protected:
   PipelineFrontEnd() = default;

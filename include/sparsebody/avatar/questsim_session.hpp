@@ -130,6 +130,7 @@ class QuestSimSession {
   // Output.
   const pose::BodyPose& pose() const noexcept { return out_.pose(); }
   const pose::WorldPose& world() const noexcept { return out_.world(); }
+  int recentres() const noexcept { return pipe_.tracker_stream().recentres(); }  // trackers/recenter.hpp
   bool has_output() const noexcept { return out_.has_output(); }
   long long frames() const noexcept { return frames_; }  // control ticks since the last reset
   double output_time() const noexcept { return pipe_.tracked_time(); }

@@ -14,14 +14,18 @@ class Resampler {
 
   double period() const noexcept { return period_; }
   void reset() noexcept { started_ = false; }
+  // The next frame restarts the tick clock and is flagged as a reset, as after a time gap (the
+  // frames before it are in another world: trackers/recenter.hpp).
+  void break_clock() noexcept { broken_ = started_; }
 
   // Calls emit(const TrackerFrame& tick, bool reset) for every model tick up to f.time.
   // Returns the number of ticks emitted. No allocation.
   template <class Emit>
   int push(const TrackerFrame& f, Emit&& emit) {
     if (!std::isfinite(f.time)) return 0;  // a frame without a usable time is dropped
-    if (!started_ || f.time <= prev_.time - 1e-9 || f.time - prev_.time > max_gap_) {
+    if (!started_ || broken_ || f.time <= prev_.time - 1e-9 || f.time - prev_.time > max_gap_) {
       const bool was = started_;
+      broken_ = false;
       started_ = true;
       prev_ = f;
       next_ = f.time + period_;
@@ -63,7 +67,7 @@ class Resampler {
   }
 
   double period_, max_gap_;
-  bool started_ = false;
+  bool started_ = false, broken_ = false;
   double next_ = 0;
   TrackerFrame prev_{}, tick_{};
 };

@@ -8,10 +8,13 @@
 //     rejected as invalid; after `relock_frames` consecutive rejections the new place is accepted
 //     and the caller is told to reset (the tracking origin moved);
 //   - the headset (or every tracker) invalid for longer than `max_hold` seconds: reset requested;
-//     until valid input returns the output holds its last pose.
+//     until valid input returns the output holds its last pose;
+//   - every tracker turned and shifted together between two input frames (a recentred tracking
+//     space, `recenter`): found by TrackerStream before resampling, a reset at that frame.
 #pragma once
 #include <cmath>
 
+#include "sparsebody/trackers/recenter.hpp"
 #include "sparsebody/trackers/types.hpp"
 
 namespace sparsebody::trackers {
@@ -21,6 +24,7 @@ struct SanitizerConfig {
   double max_hold = 0.5;        // seconds of headset loss before a reset
   int relock_frames = 3;        // consecutive jumped frames accepted as a new origin
   double quat_tolerance = 0.1;  // |1 - |q|| above this is invalid
+  RecenterConfig recenter{};    // the tracking space turned / shifted between two frames (TrackerStream)
 };
 
 // Output of one sanitised frame: poses to use (held where needed) and flags.

@@ -15,14 +15,20 @@ namespace sparsebody::trackers {
 class TrackerStream {
  public:
   explicit TrackerStream(double fps = 30.0, SanitizerConfig cfg = {}, double max_gap = 0.25)
-      : resampler_(fps, max_gap), sanitizer_(cfg) {}
+      : resampler_(fps, max_gap), sanitizer_(cfg), recenter_(cfg.recenter) {}
 
   // Calls on_tick(const TrackerFrame& tick, bool gap) for every model tick up to f.time; gap: the
-  // clock restarted at this tick (time jump or the first frame after one). Returns the tick count.
+  // clock restarted at this tick (time jump or the first frame after one, or a recentred tracking
+  // space: trackers/recenter.hpp). Returns the tick count.
   template <class OnTick>
   int push(const TrackerFrame& f, OnTick&& on_tick) noexcept {
+    if (recenter_.push(f)) {  // no tick between the two worlds; the sanitizer takes the new poses
+      resampler_.break_clock();
+      sanitizer_.reset();
+    }
     return resampler_.push(f, std::forward<OnTick>(on_tick));
   }
+  int recentres() const noexcept { return recenter_.count(); }
 
   // One model tick, sanitised with dt = the model period.
   const SanitizedFrame& sanitize(const TrackerFrame& tick) noexcept { return sanitizer_.process(tick, resampler_.period()); }
@@ -30,6 +36,7 @@ class TrackerStream {
   void reset() noexcept {
     sanitizer_.reset();
     resampler_.reset();
+    recenter_.reset();
   }
 
   double period() const noexcept { return resampler_.period(); }
@@ -38,6 +45,7 @@ class TrackerStream {
  private:
   Resampler resampler_;
   TrackerSanitizer sanitizer_;
+  RecenterDetector recenter_;
 };
 
 }  // namespace sparsebody::trackers
