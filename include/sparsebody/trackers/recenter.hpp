@@ -35,7 +35,8 @@ struct RecenterConfig {
 
 class RecenterDetector {
  public:
-  explicit RecenterDetector(RecenterConfig cfg = {}) : cfg_(cfg) {}
+  explicit RecenterDetector(RecenterConfig cfg = {})
+      : cfg_(cfg), cos2_half_turn_(std::pow(std::cos(0.5 * cfg.min_turn_deg * M_PI / 180), 2)) {}
 
   void reset() noexcept { have_ = false; }
   int count() const noexcept { return count_; }  // recentres found since construction
@@ -53,38 +54,45 @@ class RecenterDetector {
  private:
   static bool usable(const TrackerFrame& f, int k) noexcept {
     const Posef& p = f.pose[k];
-    const double n = std::sqrt(double(p.orientation.x) * p.orientation.x + double(p.orientation.y) * p.orientation.y +
-                               double(p.orientation.z) * p.orientation.z + double(p.orientation.w) * p.orientation.w);
+    const double n2 = double(p.orientation.x) * p.orientation.x + double(p.orientation.y) * p.orientation.y +
+                      double(p.orientation.z) * p.orientation.z + double(p.orientation.w) * p.orientation.w;
     return f.valid[k] && std::isfinite(p.position.x) && std::isfinite(p.position.y) && std::isfinite(p.position.z) &&
-           std::isfinite(n) && std::abs(n - 1) < 0.1;
+           n2 > 0.81 && n2 < 1.21;  // |q| within 10 % of 1 (finite)
   }
 
   bool rigid_jump(const TrackerFrame& a, const TrackerFrame& b, double dt) const noexcept {
-    if (!usable(a, 0) || !usable(b, 0)) return false;
+    if (!a.valid[0] || !b.valid[0]) return false;
     const double deg = M_PI / 180;
-    const Eigen::Quaterniond qa = to_eigen(a.pose[0].orientation).normalized(), qb = to_eigen(b.pose[0].orientation).normalized();
-    const Eigen::Matrix3d D = (qb * qa.conjugate()).toRotationMatrix();  // the headset's turn, world frame
-    if (D(1, 1) < std::cos(cfg_.tolerance_deg * deg)) return false;    // not about the vertical
+    const Eigen::Quaterniond qa = to_eigen(a.pose[0].orientation), qb = to_eigen(b.pose[0].orientation);
+    const Eigen::Quaterniond d = qb * qa.conjugate();  // the headset's turn, world frame (|d| ~ 1)
+    // Cheap first (every frame): is the change large at all? The turn's whole angle bounds its yaw;
+    // a NaN fails every comparison here and is looked at below.
+    bool large = d.w() * d.w() < cos2_half_turn_ * d.squaredNorm();
+    const double shift2 = cfg_.min_shift * cfg_.min_shift;
+    for (int k = 0; k < kTrackerCount && !large; ++k)
+      large = a.valid[k] && b.valid[k] && (to_eigen(b.pose[k].position) - to_eigen(a.pose[k].position)).squaredNorm() > shift2;
+    if (!large || !usable(a, 0) || !usable(b, 0)) return false;
+    // Rigid about the vertical: one yaw Y and one translation t move every tracker.
+    const Eigen::Matrix3d D = d.normalized().toRotationMatrix();
+    if (D(1, 1) < std::cos(cfg_.tolerance_deg * deg)) return false;  // the headset's up axis turned: not a recentre
     const double psi = std::atan2(D(0, 2) - D(2, 0), D(0, 0) + D(2, 2));
-    const Eigen::Matrix3d Y = Eigen::AngleAxisd(psi, Eigen::Vector3d::UnitY()).toRotationMatrix();
-    const Eigen::Vector3d pa = to_eigen(a.pose[0].position), pb = to_eigen(b.pose[0].position);
-    const Eigen::Vector3d t = pb - Y * pa;
-    bool large = std::abs(psi) > cfg_.min_turn_deg * deg || (pb - pa).norm() > cfg_.min_shift;
+    const Eigen::Quaterniond Yq(Eigen::AngleAxisd(psi, Eigen::Vector3d::UnitY()));
+    const Eigen::Matrix3d Y = Yq.toRotationMatrix();
+    const Eigen::Vector3d t = to_eigen(b.pose[0].position) - Y * to_eigen(a.pose[0].position);
     const double tol = cfg_.tolerance + cfg_.max_speed * dt;
     int agree = 0;
     for (int k = 1; k < kTrackerCount; ++k) {
       if (!usable(a, k) || !usable(b, k)) continue;
-      const Eigen::Vector3d ka = to_eigen(a.pose[k].position), kb = to_eigen(b.pose[k].position);
-      if ((kb - (Y * ka + t)).norm() > tol) return false;
+      if ((to_eigen(b.pose[k].position) - (Y * to_eigen(a.pose[k].position) + t)).norm() > tol) return false;
       const Eigen::Quaterniond ra = to_eigen(a.pose[k].orientation).normalized(), rb = to_eigen(b.pose[k].orientation).normalized();
-      if (rb.angularDistance(Eigen::Quaterniond(Y) * ra) > cfg_.tolerance_deg * deg) return false;
-      large = large || (kb - ka).norm() > cfg_.min_shift;
+      if (rb.angularDistance(Yq * ra) > cfg_.tolerance_deg * deg) return false;
       ++agree;
     }
-    return large && agree > 0;
+    return agree > 0;
   }
 
   RecenterConfig cfg_;
+  double cos2_half_turn_ = 0;  // cos^2(min_turn / 2): a rotation turns more than min_turn when w^2 < this |q|^2
   TrackerFrame prev_{};
   bool have_ = false;
   int count_ = 0;
