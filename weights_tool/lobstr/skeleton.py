@@ -17,7 +17,7 @@ import re
 import numpy as np
 
 from . import bvh
-from .rotations import random_rotations, yaw_frame
+from .rotations import axis_angle, random_rotations, yaw_frame
 
 # role -> accepted joint names (normalized: norm_name), tried in order; C++ twin pose/joint_map.hpp
 # (keep equal): wrists before hands and ankles before feet (SMPL names its ankle L_Ankle and its toe
@@ -162,9 +162,7 @@ def up_axis_turn(b, roles, R_local, t_local, min_share=0.7):
     u = np.zeros(3)
     u[best // 2] = 1.0 if best % 2 == 0 else -1.0
     axis = np.cross(u, [0.0, 1.0, 0.0])
-    axis /= np.linalg.norm(axis)
-    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    return np.eye(3) + K + K @ K  # 90 deg about u x Y (Rodrigues, sin = 1, 1 - cos = 1)
+    return axis_angle(axis / np.linalg.norm(axis), 90.0)  # the shortest turn from u to +Y
 
 
 class Clip:

@@ -191,25 +191,18 @@ def test_joint_roles_of_common_rigs():
             skeleton.map_roles(r["names"])
 
 
-def _axis(axis, a):
-    c, s = np.cos(a), np.sin(a)
-    i, j = [(1, 2), (2, 0), (0, 1)][axis]
-    R = np.eye(3)
-    R[i, i], R[i, j], R[j, i], R[j, j] = c, -s, s, c
-    return R
-
-
 def test_z_up_clip_reads_as_y_up(tmp_path):
     """skeleton.up_axis_turn, the twin of recordings/bvh_up_axis.hpp (tests/pipeline/test_bvh_up_axis.cpp):
     the CMU clip 01_01 written with a Z-up world reads back with the original's world positions."""
     src = "/usr/share/assimp/models/BVH/01_01.bvh"  # assimp-testmodels, installed by .ci
     b = bvh.load(src)
     assert [c.lower() for c in b.channels[0]] == ["xposition", "yposition", "zposition", "zrotation", "yrotation", "xrotation"]
-    T = _axis(0, np.pi / 2)  # +Y -> +Z
+    ax = rotations.axis_angle
+    T = ax(rotations.AXES["X"], 90.0)  # +Y -> +Z
     m = b.motion.copy()
     for f in range(b.frames):
-        z, y, x = np.radians(m[f, 3:6])
-        R = T @ _axis(2, z) @ _axis(1, y) @ _axis(0, x)
+        z, y, x = m[f, 3:6]
+        R = T @ ax(rotations.AXES["Z"], z) @ ax(rotations.AXES["Y"], y) @ ax(rotations.AXES["X"], x)
         m[f, :3] = T @ m[f, :3]
         m[f, 3:6] = np.degrees([np.arctan2(R[1, 0], R[0, 0]), np.arcsin(-R[2, 0]), np.arctan2(R[2, 1], R[2, 2])])
     lines = open(src).read().splitlines()

@@ -35,8 +35,9 @@ struct RecenterConfig {
 
 class RecenterDetector {
  public:
-  explicit RecenterDetector(RecenterConfig cfg = {})
-      : cfg_(cfg), cos2_half_turn_(std::pow(std::cos(0.5 * cfg.min_turn_deg * M_PI / 180), 2)) {}
+  // quat_tolerance: the sanitizer's (SanitizerConfig), so both judge a pose alike (checked_pose).
+  explicit RecenterDetector(RecenterConfig cfg = {}, double quat_tolerance = 0.1)
+      : cfg_(cfg), quat_tolerance_(quat_tolerance), cos2_half_turn_(std::pow(std::cos(0.5 * cfg.min_turn_deg * M_PI / 180), 2)) {}
 
   void reset() noexcept { have_ = false; }
   int count() const noexcept { return count_; }  // recentres found since construction
@@ -52,13 +53,7 @@ class RecenterDetector {
   }
 
  private:
-  static bool usable(const TrackerFrame& f, int k) noexcept {
-    const Posef& p = f.pose[k];
-    const double n2 = double(p.orientation.x) * p.orientation.x + double(p.orientation.y) * p.orientation.y +
-                      double(p.orientation.z) * p.orientation.z + double(p.orientation.w) * p.orientation.w;
-    return f.valid[k] && std::isfinite(p.position.x) && std::isfinite(p.position.y) && std::isfinite(p.position.z) &&
-           n2 > 0.81 && n2 < 1.21;  // |q| within 10 % of 1 (finite)
-  }
+  bool usable(const TrackerFrame& f, int k, PoseD& p) const noexcept { return f.valid[k] && checked_pose(f.pose[k], quat_tolerance_, p); }
 
   bool rigid_jump(const TrackerFrame& a, const TrackerFrame& b, double dt) const noexcept {
     if (!a.valid[0] || !b.valid[0]) return false;
@@ -71,27 +66,29 @@ class RecenterDetector {
     const double shift2 = cfg_.min_shift * cfg_.min_shift;
     for (int k = 0; k < kTrackerCount && !large; ++k)
       large = a.valid[k] && b.valid[k] && (to_eigen(b.pose[k].position) - to_eigen(a.pose[k].position)).squaredNorm() > shift2;
-    if (!large || !usable(a, 0) || !usable(b, 0)) return false;
+    PoseD ha, hb;
+    if (!large || !usable(a, 0, ha) || !usable(b, 0, hb)) return false;
     // Rigid about the vertical: one yaw Y and one translation t move every tracker.
-    const Eigen::Matrix3d D = d.normalized().toRotationMatrix();
+    const Eigen::Matrix3d D = (hb.orientation * ha.orientation.conjugate()).toRotationMatrix();
     if (D(1, 1) < std::cos(cfg_.tolerance_deg * deg)) return false;  // the headset's up axis turned: not a recentre
     const double psi = std::atan2(D(0, 2) - D(2, 0), D(0, 0) + D(2, 2));
     const Eigen::Quaterniond Yq(Eigen::AngleAxisd(psi, Eigen::Vector3d::UnitY()));
     const Eigen::Matrix3d Y = Yq.toRotationMatrix();
-    const Eigen::Vector3d t = to_eigen(b.pose[0].position) - Y * to_eigen(a.pose[0].position);
+    const Eigen::Vector3d t = hb.position - Y * ha.position;
     const double tol = cfg_.tolerance + cfg_.max_speed * dt;
     int agree = 0;
     for (int k = 1; k < kTrackerCount; ++k) {
-      if (!usable(a, k) || !usable(b, k)) continue;
-      if ((to_eigen(b.pose[k].position) - (Y * to_eigen(a.pose[k].position) + t)).norm() > tol) return false;
-      const Eigen::Quaterniond ra = to_eigen(a.pose[k].orientation).normalized(), rb = to_eigen(b.pose[k].orientation).normalized();
-      if (rb.angularDistance(Yq * ra) > cfg_.tolerance_deg * deg) return false;
+      PoseD ka, kb;
+      if (!usable(a, k, ka) || !usable(b, k, kb)) continue;
+      if ((kb.position - (Y * ka.position + t)).norm() > tol) return false;
+      if (kb.orientation.angularDistance(Yq * ka.orientation) > cfg_.tolerance_deg * deg) return false;
       ++agree;
     }
     return agree > 0;
   }
 
   RecenterConfig cfg_;
+  double quat_tolerance_ = 0.1;
   double cos2_half_turn_ = 0;  // cos^2(min_turn / 2): a rotation turns more than min_turn when w^2 < this |q|^2
   TrackerFrame prev_{};
   bool have_ = false;

@@ -93,16 +93,7 @@ class TrackerSanitizer {
   }
 
  private:
-  bool check(const Posef& in, PoseD& out) const noexcept {
-    const Eigen::Vector3d p = to_eigen(in.position);
-    Eigen::Quaterniond q = to_eigen(in.orientation);
-    if (!p.allFinite() || !q.coeffs().allFinite()) return false;
-    const double n = q.norm();
-    if (std::abs(n - 1.0) > cfg_.quat_tolerance) return false;
-    out.position = p;
-    out.orientation = Eigen::Quaterniond(q.coeffs() / n);
-    return true;
-  }
+  bool check(const Posef& in, PoseD& out) const noexcept { return checked_pose(in, cfg_.quat_tolerance, out); }
 
   SanitizerConfig cfg_;
   std::array<PoseD, kTrackerCount> last_{};

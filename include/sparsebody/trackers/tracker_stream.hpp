@@ -15,7 +15,7 @@ namespace sparsebody::trackers {
 class TrackerStream {
  public:
   explicit TrackerStream(double fps = 30.0, SanitizerConfig cfg = {}, double max_gap = 0.25)
-      : resampler_(fps, max_gap), sanitizer_(cfg), recenter_(cfg.recenter) {}
+      : resampler_(fps, max_gap), sanitizer_(cfg), recenter_(cfg.recenter, cfg.quat_tolerance) {}
 
   // Calls on_tick(const TrackerFrame& tick, bool gap) for every model tick up to f.time; gap: the
   // clock restarted at this tick (time jump or the first frame after one, or a recentred tracking

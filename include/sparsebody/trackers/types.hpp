@@ -55,4 +55,18 @@ struct PoseD {
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
 };
 
+// A recorded pose as a usable one: finite, with a quaternion whose norm is within quat_tolerance of
+// 1 (renormalised into out). False (out untouched) otherwise. The sanitizer's and the recentre
+// detector's test of a pose.
+inline bool checked_pose(const Posef& in, double quat_tolerance, PoseD& out) noexcept {
+  const Eigen::Vector3d p = to_eigen(in.position);
+  const Eigen::Quaterniond q = to_eigen(in.orientation);
+  if (!p.allFinite() || !q.coeffs().allFinite()) return false;
+  const double n = q.norm();
+  if (std::abs(n - 1.0) > quat_tolerance) return false;
+  out.position = p;
+  out.orientation = Eigen::Quaterniond(q.coeffs() / n);
+  return true;
+}
+
 }  // namespace sparsebody::trackers
