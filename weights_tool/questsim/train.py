@@ -41,7 +41,7 @@ import torch
 import torch.nn as tnn
 
 from .. import nets
-from ..format import write_weights
+from ..format import read_weights, write_weights
 from .env import ROOT, load_module
 from .policy import HIDDEN
 
@@ -117,6 +117,25 @@ def export(path, model, stats, n_obs, n_act, info):
                   normalization={"input_mean": mean, "input_std": std})
 
 
+def init_from_json(path, model, stats, n_obs, n_act):
+    """Loads an exported policy (export() above) into model.actor and stats; returns (iteration, samples).
+    The checkpoint's optimiser state and critic are not in the export: Adam and the critic start afresh."""
+    doc, tensors, norm = read_weights(path)
+    meta = doc.get("meta", {})
+    if doc.get("kind") != "questsim_policy" or meta.get("input_size") != n_obs or meta.get("output_size") != n_act:
+        raise SystemExit(f"{path}: expected a questsim_policy {n_obs} -> {n_act}, found {doc.get('kind')} "
+                         f"{meta.get('input_size')} -> {meta.get('output_size')}")
+    own = model.actor.state_dict()
+    if set(own) != set(tensors):
+        raise SystemExit(f"{path}: tensors {sorted(tensors)} do not match the policy's {sorted(own)}")
+    model.actor.load_state_dict({k: torch.tensor(v, dtype=own[k].dtype).reshape(own[k].shape) for k, v in tensors.items()})
+    n = int(meta.get("samples", 1_000_000))
+    std = np.asarray(norm["input_std"], np.float64)
+    stats.n, stats.mean = n, np.asarray(norm["input_mean"], np.float64)
+    stats.m2 = std * std * (n - 1)
+    return int(meta.get("iterations", 0)), n
+
+
 def plot(curve_csv, png):
     import matplotlib
     matplotlib.use("Agg")
@@ -143,6 +162,12 @@ def main(argv=None):
     ap.add_argument("train_dir")
     ap.add_argument("--out", required=True)
     ap.add_argument("--resume", action="store_true")
+    ap.add_argument("--init-json", default="",
+                    help="start from a policy in the library's format (its weights, observation statistics, samples "
+                         "and iterations); the value function starts afresh: see --value-warmup")
+    ap.add_argument("--value-warmup", type=int, default=0,
+                    help="updates that train only the value function (after --init-json, so that a fresh critic's "
+                         "advantages do not undo the policy)")
     ap.add_argument("--motions", default=DEFAULT_MOTIONS, help="regex on clip names")
     ap.add_argument("--clips", type=int, default=0, help="use this many clips (0: all matching)")
     ap.add_argument("--envs", type=int, default=128)
@@ -206,6 +231,11 @@ def main(argv=None):
         it, samples = s["iteration"], s["samples"]
         torch.set_rng_state(s["torch_rng"])
         print(f"resumed at iteration {it}, {samples / 1e6:.2f} M samples", flush=True)
+    elif a.init_json:
+        it, samples = init_from_json(a.init_json, model, stats, n_obs, n_act)
+        print(f"policy from {a.init_json} ({samples / 1e6:.2f} M samples, iteration {it}); value function afresh, "
+              f"{a.value_warmup} value-only updates first", flush=True)
+    it_start = it
     curve = os.path.join(a.out, "curve.csv")
     fields = ["iteration", "samples", "wall_s", "reward", "r_q", "r_qd", "r_x", "r_xd", "r_f", "episode_steps",
               "terminations", "residual", "residual_used", "std", "policy_loss", "value_loss", "steps_per_s"]
@@ -297,7 +327,9 @@ def main(argv=None):
             for k in range(a.minibatches):
                 idx = perm[k * mb:(k + 1) * mb]
                 d = model.dist(xb[idx])
-                if bc:  # regress the expert's action (the policy's mean; its noise is left as is)
+                if it - it_start < a.value_warmup:  # a fresh critic learns the returns; the policy waits
+                    pl = torch.zeros(())
+                elif bc:  # regress the expert's action (the policy's mean; its noise is left as is)
                     pl = ((d.mean - eb[idx]) ** 2).mean()
                 else:
                     ratio = (d.log_prob(ab[idx]).sum(-1) - lpb[idx]).exp()
