@@ -7,9 +7,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "sparsebody/recordings/bvh_up_axis.hpp"
+#include "sparsebody/recordings/clip_session.hpp"
 #include "sparsebody/recordings/tracker_csv.hpp"
-#include "sparsebody/recordings/tracker_synthesis.hpp"
 
 using namespace sparsebody;
 
@@ -21,33 +20,20 @@ bool ends_with(const std::string& s, const char* e) {
 }
 
 void read_bvh(const Options& o, Input& in) {
-  in.clip = recordings::read_bvh(o.input);
-  if (o.devices_stand >= 0) {
-    in.clip = recordings::with_held_frame(std::move(in.clip), o.devices_stand, 2.5);
+  recordings::ClipSessionOptions co;
+  co.devices = o.devices, co.device_seed = o.device_seed, co.devices_stand = o.devices_stand;
+  recordings::ClipSession cs = recordings::read_clip_session(o.input, co);
+  if (o.devices_stand >= 0)
     std::printf("stand   the clip's frame at %.2f s held for 2.5 s (--devices-stand): a standing window\n", o.devices_stand);
-  }
-  const pose::JointMap map = pose::JointMap::from_names(in.clip.skeleton, o.input);
-  const recordings::UpAxis up = recordings::make_y_up(in.clip, map);
-  const double units = recordings::guess_units(in.clip.skeleton, map);
-  recordings::SyntheticTrackers syn;
-  if (o.devices) {  // what a headset session of this motion would record: calibrated automatically
-    recordings::DeviceSynthesis d;
-    d.rate = 72;
-    if (o.device_seed > 0) {
-      d.perturb = true;
-      d.seed = o.device_seed;
-      d.timing_jitter = 0.002;
-      d.losses_per_second = 0.2;
-    }
-    syn = recordings::synthesize_device_trackers(in.clip, map, units, d);
-  } else {
-    syn = recordings::synthesize_trackers(in.clip, map, units);
-  }
-  in.frames = std::move(syn.frames);
-  in.at_joints = !o.devices;
+  in.clip = std::move(cs.clip);
+  const recordings::SyntheticTrackers& syn = cs.trackers;
+  const recordings::UpAxis& up = cs.up;
+  const double units = cs.units;
+  in.frames = std::move(cs.trackers.frames);
+  in.at_joints = !cs.devices;
   in.leg = syn.leg;
-  in.truth.init(in.clip, map, units, syn.floor);
-  in.fps = o.devices ? 72.0 : 1.0 / in.clip.frame_time;
+  in.truth.init(in.clip, cs.map, units, syn.floor);
+  in.fps = cs.fps();
   std::printf("input   %s: %d frames at %.1f fps, %d joints, units %.4g m, leg %.3f m\n", o.input.c_str(), in.clip.frames,
               1.0 / in.clip.frame_time, in.clip.skeleton.size(), units, syn.leg);
   if (up.turned)

@@ -35,7 +35,7 @@
 #include "sparsebody/io/weights_json.hpp"
 #include "sparsebody/nn/storage.hpp"
 #include "sparsebody/recordings/bvh.hpp"
-#include "sparsebody/recordings/bvh_up_axis.hpp"
+#include "sparsebody/recordings/clip_session.hpp"
 #include "sparsebody/recordings/tracker_csv.hpp"
 #include "sparsebody/recordings/tracker_synthesis.hpp"
 
@@ -399,25 +399,13 @@ py::dict read_input(const std::string& path, bool devices, unsigned device_seed,
   py::dict d;
   bool at_joints = false;
   if (bvh) {
-    recordings::BvhClip clip = recordings::read_bvh(path);
-    if (devices_stand >= 0) clip = recordings::with_held_frame(std::move(clip), devices_stand, 2.5);
-    const pose::JointMap map = pose::JointMap::from_names(clip.skeleton, path);
-    recordings::make_y_up(clip, map);
-    const double units = recordings::guess_units(clip.skeleton, map);
-    recordings::SyntheticTrackers syn;
-    if (devices) {
-      recordings::DeviceSynthesis s;
-      s.rate = 72;
-      if (device_seed > 0) {
-        s.perturb = true;
-        s.seed = device_seed;
-        s.timing_jitter = 0.002;
-        s.losses_per_second = 0.2;
-      }
-      syn = recordings::synthesize_device_trackers(clip, map, units, s);
-    } else {
-      syn = recordings::synthesize_trackers(clip, map, units);
-    }
+    recordings::ClipSessionOptions co;
+    co.devices = devices, co.device_seed = device_seed, co.devices_stand = devices_stand;
+    recordings::ClipSession cs = recordings::read_clip_session(path, co);
+    const recordings::BvhClip& clip = cs.clip;
+    const pose::JointMap& map = cs.map;
+    const double units = cs.units;
+    recordings::SyntheticTrackers& syn = cs.trackers;
     frames = std::move(syn.frames);
     at_joints = !devices;
     // The clip as ground truth (demo_input's Truth): world positions in metres, floor at y = 0.
@@ -505,15 +493,13 @@ py::dict demo_metrics(const Pipeline& p, const py::dict& r, const std::string& p
                       double devices_stand) {
   if (device_seed > 0 || devices_stand >= 0) devices = true;
   auto in = std::make_unique<demo::Input>();  // Truth points into in->clip: keep it where it is
-  in->clip = recordings::read_bvh(path);
-  if (devices_stand >= 0) in->clip = recordings::with_held_frame(std::move(in->clip), devices_stand, 2.5);
-  const pose::JointMap map = pose::JointMap::from_names(in->clip.skeleton, path);
-  const double units = recordings::guess_units(in->clip.skeleton, map);
-  recordings::DeviceSynthesis ds;
-  ds.rate = 72;
-  if (device_seed > 0) ds.perturb = true, ds.seed = device_seed, ds.timing_jitter = 0.002, ds.losses_per_second = 0.2;
-  const recordings::SyntheticTrackers syn = devices ? recordings::synthesize_device_trackers(in->clip, map, units, ds)
-                                                    : recordings::synthesize_trackers(in->clip, map, units);
+  recordings::ClipSessionOptions co;
+  co.devices = devices, co.device_seed = device_seed, co.devices_stand = devices_stand;
+  recordings::ClipSession cs = recordings::read_clip_session(path, co);
+  in->clip = std::move(cs.clip);
+  const pose::JointMap& map = cs.map;
+  const double units = cs.units;
+  const recordings::SyntheticTrackers& syn = cs.trackers;
   in->truth.init(in->clip, map, units, syn.floor);
   in->have_truth = true, in->at_joints = !devices, in->leg = syn.leg;
   const auto steps = r["steps"].cast<py::array_t<std::int32_t, kIn>>();
