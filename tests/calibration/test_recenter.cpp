@@ -2,13 +2,14 @@
 // The detector finds it exactly where it happens and nowhere in natural motion; the LoBSTr and
 // Neural3Points pipelines on a device session of the CMU clip 01_01 stay with the user through a
 // 90 deg / 0.5 m recentre (their output, turned back, within a few cm of the same session without
-// it), with no allocation.
+// it), with no allocation; the physics mode passes the recentre on to its direct pipeline.
 #include <doctest/doctest.h>
 
 #include <string>
 
 #include "sparsebody/avatar/lobstr_pipeline.hpp"
 #include "sparsebody/avatar/n3p_direct.hpp"
+#include "sparsebody/avatar/n3p_physics.hpp"
 #include "sparsebody/recordings/bvh.hpp"
 #include "sparsebody/recordings/tracker_synthesis.hpp"
 #include "sparsebody/trackers/recenter.hpp"
@@ -138,4 +139,35 @@ TEST_CASE("LoBSTr and Neural3Points stay with the user through a recentre of the
   check_recentre<avatar::LoBSTrCompact, std::shared_ptr<const avatar::LoBSTrCompact::Weights>, avatar::LoBSTrConfig>(
       avatar::LoBSTrCompact::load(dir + "/lobstr_compact.weights.json"), "LoBSTr");
   check_recentre<avatar::N3PDirect, avatar::N3PDirect::Weights, avatar::N3PConfig>(avatar::N3PDirect::load(dir + "/n3p"), "Neural3Points");
+}
+
+TEST_CASE("physics mode: its direct pipeline takes a recentred space at once, not as a jump to hold") {
+  // The physics mode resamples for its direct pipeline and feeds it ticks; the front end's stream
+  // finds the recentre, and direct mode's sanitizer must not hold the > 1 m headset jump it sees
+  // (max_jump: held for relock_frames - 1 frames) as a glitch.
+  const auto& s = device_session();
+  const std::size_t at = 72 * 5;
+  const double yaw = M_PI / 2;
+  const Eigen::Vector3d shift(1.5, 0, -1.0);  // the headset moves > 1 m
+  avatar::N3PPhysicsDefault p(avatar::N3PDirect::load(std::string(SPARSEBODY_WEIGHTS_DIR) + "/n3p"));
+  int ticks_after = 0;
+  double worst = 0, jump = 0;
+  for (std::size_t i = 0; i < at + 36; ++i) {
+    const trackers::TrackerFrame f = i >= at ? recentred(s[i], yaw, shift) : s[i];
+    if (i == at) jump = (trackers::to_eigen(f.pose[0].position) - trackers::to_eigen(s[i - 1].pose[0].position)).norm();
+    sparsebody_test::AllocationCounter count;
+    const int n = p.push(f);
+    CHECK(count.count() == 0);
+    if (i < at || n == 0) continue;
+    ++ticks_after;
+    // the headset direct mode used on this tick, against the recentred input it came from
+    const Eigen::Vector3d used = p.direct().tracker_stream().last_sanitized().pose[0].position;
+    worst = std::max(worst, (used - trackers::to_eigen(f.pose[0].position)).norm());
+  }
+  MESSAGE("physics mode through a " << jump << " m headset recentre: direct mode's headset at most " << 100 * worst
+                                    << " cm from the input over " << ticks_after << " ticks");
+  CHECK(jump > 1.0);
+  CHECK(p.recentres() == 1);
+  CHECK(ticks_after > 10);
+  CHECK(worst < 0.1);  // a tick interpolates at most one 72 Hz frame of motion; a held frame is > 1 m off
 }

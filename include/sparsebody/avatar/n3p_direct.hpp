@@ -217,6 +217,11 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   long long calibration_changes() const noexcept { return calibration_changes_; }
 
   // --- running ------------------------------------------------------------------------------
+  // A caller that feeds step() its own ticks (the physics mode) and found a recentred tracking
+  // space (trackers/recenter.hpp) says so before the next step: the sanitizer then takes the new
+  // poses, as push() does, instead of holding them as a jump.
+  void tracking_space_moved() noexcept { stream_.restart_sanitizer(); }
+
   // push(frame) (any rate, PipelineFrontEnd) runs step once per 30 Hz tick.
   // One model frame (the caller did the resampling). `restart`: state reset before this frame.
   void step(const trackers::TrackerFrame& f, bool restart = false) noexcept {

@@ -120,6 +120,10 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
   // --- running --------------------------------------------------------------------------------
   // One 30 Hz frame (the caller resampled): the direct step, 4 simulation steps, maybe a control step.
   void step(const trackers::TrackerFrame& f, bool gap = false) noexcept {
+    if (this->recentres() != recentres_seen_) {  // the front end's stream found one (its push): direct mode sanitises
+      recentres_seen_ = this->recentres();
+      direct_.tracking_space_moved();
+    }
     direct_.step(f, gap);
     ++this->frames_;
     if (gap) restart_ = true;
@@ -150,6 +154,7 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
     if (control_) control_->reset();
     started_ = restart_ = false;
     calibration_seen_ = direct_.calibration_changes();
+    recentres_seen_ = this->recentres();
     residual_ = {};
     stats_ = {};
     // a fresh simulator (contact and actuation state included, options kept) and torques, so that
@@ -297,6 +302,7 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
   double out_time_ = 0;
   bool started_ = false, restart_ = false;
   long long calibration_seen_ = 0;  // direct_.calibration_changes() already restarted for
+  int recentres_seen_ = 0;          // this->recentres() already passed on to direct mode
   control::ResidualWrench residual_;
   control::ResidualStats stats_;
   pose::BodyProportions prop_{};  // standard: the simulated character

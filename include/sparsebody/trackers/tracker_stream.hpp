@@ -33,6 +33,10 @@ class TrackerStream {
   // One model tick, sanitised with dt = the model period.
   const SanitizedFrame& sanitize(const TrackerFrame& tick) noexcept { return sanitizer_.process(tick, resampler_.period()); }
 
+  // The tracking space moved under a pipeline fed ticks by a caller that resamples itself (the
+  // physics mode's direct pipeline): what push() does to the sanitizer on a recentre.
+  void restart_sanitizer() noexcept { sanitizer_.reset(); }
+
   void reset() noexcept {
     sanitizer_.reset();
     resampler_.reset();
