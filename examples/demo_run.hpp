@@ -157,6 +157,9 @@ std::optional<Metrics> stream(const Options& o, Input& in, Pipeline& pipe, Shown
   if (pipe.recentres() > 0)
     std::printf("recentre %d recentred tracking space%s (every tracker turned / shifted together between two frames): the model "
                 "restarted there\n", pipe.recentres(), pipe.recentres() == 1 ? "" : "s");
+  if (pipe.controller_swaps() > 0)
+    std::printf("swap    the controllers were held in the other hands (left / right crossed while hanging): exchanged %s%s\n",
+                pipe.controllers_swapped() ? "from then on" : "and back", pipe.controller_swaps() > 2 ? " (several times)" : "");
   print_calibration(o, in, pipe);
   if (viewer) {
     nlohmann::json info = {{"input", o.input}, {"model", in.model}, {"fps", fps}, {"user_scale", pipe.user_scale()},

@@ -15,6 +15,9 @@ against the clip that drove it, the same way for every input path:
   csvstop  the same, but the stand holds the frame nearest half-way where both feet are on the floor
            (a real user stops on both feet; csv freezes whatever frame is half-way, often mid-stride,
            and the truth then stands with a foot in the air)
+  swapped  devices with the controllers in the other hands (symmetric controllers whose roles the
+           runtime gave the wrong way round), through the CSV path: the session written as the
+           demo's tracker CSV with its left / right hand columns exchanged, read back
   cmu      the CMU clips of Debian's assimp-testmodels (another performer, another skeleton)
 
 Metrics (12 joints mapped by role: hips, head, hands, thighs, knees, ankles, toes; metres -> cm):
@@ -164,6 +167,17 @@ def run_demo(demo, src, out, model, extra, trackers_out=None):
 
 
 DEVICES = ["--devices", "--devices-stand", "0"]  # a session that starts with the user standing 2.5 s
+CSV_MODES = ("csv", "csvstop", "swapped")
+
+
+def swap_hand_columns(path):
+    """Exchanges the left and right controllers of a tracker CSV by renaming its header's columns."""
+    with open(path) as f:
+        lines = f.readlines()
+    i = next(k for k, l in enumerate(lines) if not l.startswith("#"))
+    lines[i] = lines[i].replace("left_hand", "@").replace("right_hand", "left_hand").replace("@", "right_hand")
+    with open(path, "w") as f:
+        f.writelines(lines)
 
 
 def mode_inputs(mode, val_dir, every, tmp):
@@ -175,6 +189,8 @@ def mode_inputs(mode, val_dir, every, tmp):
         return files, DEVICES, files
     if mode in ("csv", "csvstop"):  # the user walks from the first frame and stands half-way through the clip
         return files, ["--devices"], files
+    if mode == "swapped":
+        return files, DEVICES, files
     if mode == "cmu":
         return [f for f in CMU if os.path.exists(f)], [], [f for f in CMU if os.path.exists(f)]
     from . import bodies
@@ -223,14 +239,16 @@ def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None, sb=No
                 hold = (float(opts_c[opts_c.index("--devices-stand") + 1]), 2.5)
         csv = os.path.join(tmp, "session.csv")
         if mode in ("csv", "csvstop"):
-            half = 0.5 * Clip(s).frames / 30.0 if mode == "csv" else double_support_near_half(s)
+            half = double_support_near_half(s) if mode == "csvstop" else 0.5 * Clip(s).frames / 30.0
             opts_c += ["--devices-stand", f"{half:.3f}"]
             hold = (half, 2.5)
         if sb is not None:
-            if mode in ("csv", "csvstop"):
+            if mode in CSV_MODES:
                 kw = pymod.demo_options(opts_c)
                 sb.read_input(s, devices=True, device_seed=kw["device_seed"], devices_stand=kw["devices_stand"],
                               trackers_out=csv)
+                if mode == "swapped":
+                    swap_hand_columns(csv)
                 rc, res = module_run(sb, csv, model, extra)
             else:
                 rc, res = module_run(sb, s, model, opts_c + extra)
@@ -239,11 +257,13 @@ def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None, sb=No
                 continue
             m = compare_positions(res, t, hold=hold)
         else:
-            if mode in ("csv", "csvstop"):
+            if mode in CSV_MODES:
                 rc, log = run_demo(demo, s, os.path.join(tmp, "unused.bvh"), model, opts_c + extra, trackers_out=csv)
                 if rc != 0:
                     fails.append((s, log.strip().splitlines()[-1:]))
                     continue
+                if mode == "swapped":
+                    swap_hand_columns(csv)
                 rc, log = run_demo(demo, csv, out, model, extra)
             else:
                 rc, log = run_demo(demo, s, out, model, opts_c + extra)

@@ -112,7 +112,7 @@ def demo_options(extra):
 
 def run_clip(sb, path, model="lobstr", devices=False, device_seed=0, devices_stand=-1.0, no_pelvis=False,
              storage="auto", weights="", contact_ik=True, mode="streaming", physics=False, trackers_out="",
-             chunk=0):
+             chunk=0, controller_swap=True):
     """sparsebody_demo INPUT --model MODEL [...] without the subprocess: the same input synthesis
     (read_input), the same sizing (trackers at the joints: leg length; otherwise the automatic
     calibration), the same frame loop. physics (or model "n3p_physics"): Neural3Points' normal mode.
@@ -128,7 +128,7 @@ def run_clip(sb, path, model="lobstr", devices=False, device_seed=0, devices_sta
                         no_pelvis=no_pelvis, trackers_out=trackers_out)
     if model == "lobstr" and not inp["pelvis"]:
         raise ValueError(f"{path} has no valid pelvis tracker frame; LoBSTr needs one (use model n3p)")
-    pipe = sb.create(model, weights=weights, storage=storage, contact_ik=contact_ik, mode=mode)
+    pipe = sb.create(model, weights=weights, storage=storage, contact_ik=contact_ik, mode=mode, controller_swap=controller_swap)
     if inp["at_joints"]:
         L = inp["lengths"]
         pipe.fit_leg_length(inp["leg"], L["torso"], L["arm"])

@@ -1,6 +1,8 @@
 // Counts global heap allocations, to prove that per-step paths never allocate, and records the
 // largest single one, to prove that loaders allocate what the bytes present justify.
 // Include in exactly ONE translation unit of a test executable: it replaces global operator new/delete.
+// Another translation unit of the same executable defines SPARSEBODY_ALLOC_COUNTER_USE_ONLY first and
+// gets the counters without a second definition of the operators.
 #pragma once
 #include <atomic>
 #include <cstddef>
@@ -30,6 +32,7 @@ struct LargestAllocation {
 };
 }  // namespace sparsebody_test
 
+#ifndef SPARSEBODY_ALLOC_COUNTER_USE_ONLY
 inline void* sparsebody_test_alloc(std::size_t n, std::size_t align) {
   sparsebody_test::g_allocations.fetch_add(1, std::memory_order_relaxed);
   if (sparsebody_test::g_recording_largest.load(std::memory_order_relaxed)) {
@@ -61,3 +64,4 @@ void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
 void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
 void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+#endif  // SPARSEBODY_ALLOC_COUNTER_USE_ONLY

@@ -136,6 +136,8 @@ class Pipeline {
   virtual const pose::JointMap& joint_map() const = 0;
   virtual double frame_rate() const = 0;
   virtual double user_scale() const = 0;
+  virtual int recentres() const = 0;         // trackers/recenter.hpp
+  virtual int controller_swaps() const = 0;  // trackers/controller_swap.hpp
   virtual void set_scale(double s) = 0;
   virtual bool calibrate(const trackers::TrackerFrame& f) = 0;
   virtual void recalibrate() = 0;
@@ -165,6 +167,8 @@ class PipelineOf : public Pipeline {
   const pose::JointMap& joint_map() const override { return p_.joint_map(); }
   double frame_rate() const override { return p_.meta().frame_rate; }
   double user_scale() const override { return p_.user_scale(); }
+  int recentres() const override { return p_.recentres(); }
+  int controller_swaps() const override { return p_.controller_swaps(); }
   void set_scale(double s) override {
     if constexpr (pymod::detail::is_physics<P>::value || std::is_same_v<std::decay_t<decltype(p_.calibration())>, features::n3p::N3PCalibration>) {
       features::n3p::N3PCalibration c;  // as the demo's set_n3p_scale
@@ -239,7 +243,7 @@ std::unique_ptr<Pipeline> make(const std::string& path, const C& cfg) {
 }
 
 std::unique_ptr<Pipeline> create(const std::string& model, std::string weights, const std::string& storage_in, bool contact_ik,
-                                 const std::string& mode) {
+                                 const std::string& mode, bool controller_swap = true) {
   const std::string storage = resolve_storage(storage_in);
   if (mode != "streaming" && mode != "window") throw py::value_error("mode must be streaming or window, got '" + mode + "'");
   std::unique_ptr<Pipeline> p;
@@ -249,6 +253,7 @@ std::unique_ptr<Pipeline> create(const std::string& model, std::string weights, 
     avatar::LoBSTrConfig cfg;
     cfg.mode = mode == "window" ? avatar::RunMode::Window : avatar::RunMode::Streaming;
     cfg.contact_ik = contact_ik;
+    cfg.sanitizer.controller_swap.enabled = controller_swap;
     // The sizes from the file's meta, as the demo (a missing or malformed file: LoadError naming it).
     const io::WeightsDocument doc = io::read_weights_file(weights);
     const auto& meta = doc.info.meta;
@@ -272,6 +277,7 @@ std::unique_ptr<Pipeline> create(const std::string& model, std::string weights, 
     if (model == "n3p") {
       avatar::N3PConfig cfg;
       cfg.foot_ik = contact_ik;  // as the demo: --no-contact-ik turns foot IK off
+      cfg.sanitizer.controller_swap.enabled = controller_swap;
       p = storage == "f16"  ? make<avatar::N3PDirectF16>(weights, cfg)
           : storage == "q8" ? make<avatar::N3PDirectQ8>(weights, cfg)
                             : make<avatar::N3PDirect>(weights, cfg);
@@ -279,6 +285,7 @@ std::unique_ptr<Pipeline> create(const std::string& model, std::string weights, 
     } else {
       avatar::N3PPhysicsConfig cfg;
       cfg.direct.foot_ik = contact_ik;
+      cfg.direct.sanitizer.controller_swap.enabled = controller_swap;
       p = storage == "f16"  ? make<avatar::N3PPhysicsF16>(weights, cfg)
           : storage == "q8" ? make<avatar::N3PPhysicsQ8>(weights, cfg)
                             : make<avatar::N3PPhysicsDefault>(weights, cfg);
@@ -585,6 +592,9 @@ PYBIND11_MODULE(sparsebody, m) {
       .def("calibration_report", [](const Pipeline& p) { return report_dict(p.report()); })
       .def("summary", &Pipeline::summary, "Physics: residual wrench statistics, falls, failures (empty otherwise).")
       .def_property_readonly("joint_names", [](const Pipeline& p) { return p.skeleton().names; })
+      .def_property_readonly("recentres", &Pipeline::recentres, "recentred tracking spaces found so far (each restarted the model)")
+      .def_property_readonly("controller_swaps", &Pipeline::controller_swaps,
+                             "times the controllers were found in the other hands and exchanged")
       .def_property_readonly("parents", [](const Pipeline& p) { return p.skeleton().parents; })
       .def_property_readonly("offsets", [](const Pipeline& p) {
         const auto& s = p.skeleton();
@@ -614,9 +624,10 @@ PYBIND11_MODULE(sparsebody, m) {
       .def("__repr__", [](const Pipeline& p) { return "<sparsebody.Pipeline " + p.description + ">"; });
 
   m.def("create", &create, py::arg("model"), py::arg("weights") = "", py::arg("storage") = "auto", py::arg("contact_ik") = true,
-        py::arg("mode") = "streaming",
+        py::arg("mode") = "streaming", py::arg("controller_swap") = true,
         "A pipeline: model 'lobstr', 'n3p' (direct) or 'n3p_physics'; weights '' = the shipped examples/weights; storage "
-        "auto|float|f16|q8 (auto: the build's fastest, the demo's default); contact_ik as the demo's (--no-contact-ik = False).");
+        "auto|float|f16|q8 (auto: the build's fastest, the demo's default); contact_ik as the demo's (--no-contact-ik = False); "
+        "controller_swap: exchange controllers found in the other hands (trackers/controller_swap.hpp).");
   m.def("LoBSTr", [](const std::string& w, const std::string& s, bool ik, const std::string& mode) { return create("lobstr", w, s, ik, mode); },
         py::arg("weights") = "", py::arg("storage") = "auto", py::arg("contact_ik") = true, py::arg("mode") = "streaming");
   m.def("N3PDirect", [](const std::string& w, const std::string& s, bool ik) { return create("n3p", w, s, ik, "streaming"); },

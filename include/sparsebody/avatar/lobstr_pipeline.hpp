@@ -158,6 +158,13 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   }
   // What the calibration in use is based on (default body, automatic, explicit, refused).
   const features::CalibrationReport& calibration_report() const noexcept { return auto_.report(); }
+  // For the front end (PipelineFrontEnd): the headset's o_head, and the controllers exchanged by
+  // the tracker stream from the next tick on (their orientation offsets follow the devices).
+  Eigen::Quaterniond head_offset() const noexcept { return calib_.offset[0]; }
+  void swap_controller_calibration() noexcept {
+    calib_.swap_controllers();
+    auto_.swap_controllers();
+  }
   const features::AutoCalibration& auto_calibration() const noexcept { return auto_; }
 
   // --- running ------------------------------------------------------------------------------

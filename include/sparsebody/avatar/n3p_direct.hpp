@@ -212,6 +212,14 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   // What the calibration in use is based on (default body, automatic, explicit, refused).
   const features::CalibrationReport& calibration_report() const noexcept { return auto_.report(); }
   const features::AutoCalibration& auto_calibration() const noexcept { return auto_; }
+  // For the front end (PipelineFrontEnd): the headset's o_head, and the controllers exchanged by
+  // the tracker stream from the next tick on (their orientation offsets follow the devices; the
+  // wrist offsets d_1, d_2 belong to the hands and stay).
+  Eigen::Quaterniond head_offset() const noexcept { return calib_.base.offset[0]; }
+  void swap_controller_calibration() noexcept {
+    calib_.base.swap_controllers();
+    auto_.swap_controllers();
+  }
   // Counts calibration changes (automatic or explicit): a reader of this pipeline's output (the
   // physics mode) restarts when it moves.
   long long calibration_changes() const noexcept { return calibration_changes_; }

@@ -114,6 +114,9 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
   bool calibrate(const trackers::TrackerFrame& frame) noexcept { return direct_.calibrate(frame); }
   void set_calibration(const features::n3p::N3PCalibration& c) noexcept { direct_.set_calibration(c); }
   void recalibrate() noexcept { direct_.recalibrate(); }
+  // For the front end (PipelineFrontEnd): direct mode's, which this pipeline feeds ticks.
+  Eigen::Quaterniond head_offset() const noexcept { return direct_.head_offset(); }
+  void swap_controller_calibration() noexcept { direct_.swap_controller_calibration(); }
   const features::n3p::N3PCalibration& calibration() const noexcept { return direct_.calibration(); }
   const features::CalibrationReport& calibration_report() const noexcept { return direct_.calibration_report(); }
 

@@ -6,7 +6,11 @@
 // sanitises the tick (stream_.sanitize), counts it (++frames_), builds its frame in out_.pose() /
 // out_.world() and commits it (out_.commit(): a frame that is not finite keeps the last one). Its
 // constructor calls start_front_end once its model rate and skeleton are known, its reset()
-// calls reset_front_end().
+// calls reset_front_end(). It also provides `Eigen::Quaterniond head_offset() const` (its
+// calibration's o_head, the heading the controller-swap check uses) and
+// `void swap_controller_calibration() noexcept` (the stream found the controllers in the other
+// hands and exchanges them from this tick on: the calibration's controller offsets follow their
+// devices), called before the first step of the new roles.
 #pragma once
 #include <utility>
 
@@ -21,13 +25,19 @@ class PipelineFrontEnd {
   // Feeds one input frame at any rate; runs one model step per model tick it completes.
   // Returns the number of steps run (0 when the frame falls between ticks).
   int push(const trackers::TrackerFrame& f) noexcept {
-    return stream_.push(f, [this](const trackers::TrackerFrame& tick, bool gap) { self().step(tick, gap); });
+    stream_.set_head_offset(self().head_offset());
+    return stream_.push(f, [this](const trackers::TrackerFrame& tick, bool gap) {
+      follow_controller_roles();
+      self().step(tick, gap);
+    });
   }
   // The same, calling after(tick, gap) after each step: for a pipeline that runs on this one's
   // output (the physics mode on direct mode) and so shares its ticks.
   template <class After>
   int push(const trackers::TrackerFrame& f, After&& after) noexcept {
+    stream_.set_head_offset(self().head_offset());
     return stream_.push(f, [this, &after](const trackers::TrackerFrame& tick, bool gap) {
+      follow_controller_roles();
       self().step(tick, gap);
       after(tick, gap);
     });
@@ -43,12 +53,17 @@ class PipelineFrontEnd {
   // Recentred tracking spaces found in the input so far (trackers/recenter.hpp: each one restarted
   // the model at that frame).
   int recentres() const noexcept { return stream_.recentres(); }
+  // Times the controllers were found in the other hands and exchanged (trackers/controller_swap.hpp),
+  // and whether they are exchanged now.
+  int controller_swaps() const noexcept { return stream_.controller_swaps(); }
+  bool controllers_swapped() const noexcept { return stream_.controllers_swapped(); }
 
  protected:
   PipelineFrontEnd() = default;
 
   void start_front_end(double fps, const trackers::SanitizerConfig& cfg, int joints) {
     stream_ = trackers::TrackerStream(fps, cfg);
+    swaps_seen_ = 0;
     out_.resize(joints);
   }
   void reset_front_end() noexcept {
@@ -60,9 +75,15 @@ class PipelineFrontEnd {
   trackers::TrackerStream stream_;
   pose::PoseOutput out_;
   long long frames_ = 0;
+  int swaps_seen_ = 0;  // stream_.controller_swaps() the calibration has followed
 
  private:
   Derived& self() noexcept { return static_cast<Derived&>(*this); }
+  void follow_controller_roles() noexcept {
+    if (stream_.controller_swaps() == swaps_seen_) return;
+    swaps_seen_ = stream_.controller_swaps();
+    self().swap_controller_calibration();
+  }
 };
 
 }  // namespace sparsebody::avatar

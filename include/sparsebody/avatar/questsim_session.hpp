@@ -131,6 +131,10 @@ class QuestSimSession {
   const pose::BodyPose& pose() const noexcept { return out_.pose(); }
   const pose::WorldPose& world() const noexcept { return out_.world(); }
   int recentres() const noexcept { return pipe_.tracker_stream().recentres(); }  // trackers/recenter.hpp
+  // Controllers found in the other hands and exchanged (trackers/controller_swap.hpp; the policy
+  // observes the devices' own frames, so nothing else follows).
+  int controller_swaps() const noexcept { return pipe_.tracker_stream().controller_swaps(); }
+  bool controllers_swapped() const noexcept { return pipe_.tracker_stream().controllers_swapped(); }
   bool has_output() const noexcept { return out_.has_output(); }
   long long frames() const noexcept { return frames_; }  // control ticks since the last reset
   double output_time() const noexcept { return pipe_.tracked_time(); }

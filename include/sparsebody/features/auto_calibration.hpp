@@ -152,6 +152,14 @@ class AutoCalibration {
   }
 
   // A time discontinuity (reset, gap): the current window ends without being used.
+  // The tracker stream exchanged the controllers (trackers/controller_swap.hpp): the calibration's
+  // offsets follow their devices (Calibration::swap_controllers), and an open window, whose frames
+  // had the old roles, is dropped.
+  void swap_controllers() noexcept {
+    calib_.swap_controllers();
+    break_window();
+  }
+
   void break_window() noexcept {
     rise_run_ = false;
     held_ = 0;

@@ -20,6 +20,7 @@
 #pragma once
 #include <array>
 #include <cmath>
+#include <utility>
 
 #include "sparsebody/features/device_model.hpp"
 #include "sparsebody/features/heading_frame.hpp"
@@ -99,6 +100,11 @@ struct Calibration {
     *this = c;
     return true;
   }
+
+  // The controllers were found in the other hands (trackers/controller_swap.hpp) and their roles
+  // exchanged: each orientation offset o_k was measured on a device, so it follows the device; the
+  // positional offsets d_k belong to the hands (mirrored grips) and stay.
+  void swap_controllers() noexcept { std::swap(offset[1], offset[2]); }
 
   // The pelvis tracker's offset from the calibration frame (scale and floor already set): along
   // the calibrated pelvis's up axis (vertical there), so that the joint it gives sits at the

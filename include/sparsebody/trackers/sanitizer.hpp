@@ -10,10 +10,13 @@
 //   - the headset (or every tracker) invalid for longer than `max_hold` seconds: reset requested;
 //     until valid input returns the output holds its last pose;
 //   - every tracker turned and shifted together between two input frames (a recentred tracking
-//     space, `recenter`): found by TrackerStream before resampling, a reset at that frame.
+//     space, `recenter`): found by TrackerStream before resampling, a reset at that frame;
+//   - the left and right controllers held in the other hands (`controller_swap`): TrackerStream
+//     exchanges them from the frame where that is clear, a reset there.
 #pragma once
 #include <cmath>
 
+#include "sparsebody/trackers/controller_swap.hpp"
 #include "sparsebody/trackers/recenter.hpp"
 #include "sparsebody/trackers/types.hpp"
 
@@ -25,6 +28,7 @@ struct SanitizerConfig {
   int relock_frames = 3;        // consecutive jumped frames accepted as a new origin
   double quat_tolerance = 0.1;  // |1 - |q|| above this is invalid
   RecenterConfig recenter{};    // the tracking space turned / shifted between two frames (TrackerStream)
+  ControllerSwapConfig controller_swap{};  // left / right controllers held in the other hands (TrackerStream)
 };
 
 // Output of one sanitised frame: poses to use (held where needed) and flags.

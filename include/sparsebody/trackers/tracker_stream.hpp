@@ -7,6 +7,7 @@
 #pragma once
 #include <utility>
 
+#include "sparsebody/trackers/controller_swap.hpp"
 #include "sparsebody/trackers/resampler.hpp"
 #include "sparsebody/trackers/sanitizer.hpp"
 
@@ -15,20 +16,31 @@ namespace sparsebody::trackers {
 class TrackerStream {
  public:
   explicit TrackerStream(double fps = 30.0, SanitizerConfig cfg = {}, double max_gap = 0.25)
-      : resampler_(fps, max_gap), sanitizer_(cfg), recenter_(cfg.recenter, cfg.quat_tolerance) {}
+      : resampler_(fps, max_gap), sanitizer_(cfg), recenter_(cfg.recenter, cfg.quat_tolerance),
+        swap_(cfg.controller_swap, cfg.quat_tolerance) {}
 
   // Calls on_tick(const TrackerFrame& tick, bool gap) for every model tick up to f.time; gap: the
-  // clock restarted at this tick (time jump or the first frame after one, or a recentred tracking
-  // space: trackers/recenter.hpp). Returns the tick count.
+  // clock restarted at this tick (time jump or the first frame after one, a recentred tracking
+  // space: trackers/recenter.hpp, or controllers found swapped: trackers/controller_swap.hpp).
+  // Returns the tick count. The frame's controllers are exchanged first when controllers_swapped().
   template <class OnTick>
-  int push(const TrackerFrame& f, OnTick&& on_tick) noexcept {
-    if (recenter_.push(f)) {  // no tick between the two worlds; the sanitizer takes the new poses
+  int push(const TrackerFrame& in, OnTick&& on_tick) noexcept {
+    TrackerFrame f = in;
+    const bool swap = swap_.push(in, head_offset_);
+    swap_.apply(f);
+    if (recenter_.push(f) || swap) {  // no tick between the two worlds; the sanitizer takes the new poses
       resampler_.break_clock();
       sanitizer_.reset();
     }
     return resampler_.push(f, std::forward<OnTick>(on_tick));
   }
   int recentres() const noexcept { return recenter_.count(); }
+  // Times the controllers' roles were exchanged, and whether they are now.
+  int controller_swaps() const noexcept { return swap_.count(); }
+  bool controllers_swapped() const noexcept { return swap_.swapped(); }
+  // The calibration's headset orientation offset o_head, which says where the body faces (the
+  // swap detector's heading); the OpenXR half turn until a pipeline sets its own.
+  void set_head_offset(const Eigen::Quaterniond& o) noexcept { head_offset_ = o; }
 
   // One model tick, sanitised with dt = the model period.
   const SanitizedFrame& sanitize(const TrackerFrame& tick) noexcept { return sanitizer_.process(tick, resampler_.period()); }
@@ -40,7 +52,7 @@ class TrackerStream {
   void reset() noexcept {
     sanitizer_.reset();
     resampler_.reset();
-    recenter_.reset();
+    recenter_.reset();  // the controllers' roles are kept: they belong to the devices, like a calibration
   }
 
   double period() const noexcept { return resampler_.period(); }
@@ -50,6 +62,8 @@ class TrackerStream {
   Resampler resampler_;
   TrackerSanitizer sanitizer_;
   RecenterDetector recenter_;
+  ControllerSwapDetector swap_;
+  Eigen::Quaterniond head_offset_ = ControllerSwapDetector::openxr_head_offset();
 };
 
 }  // namespace sparsebody::trackers
