@@ -14,6 +14,7 @@
 #include "sparsebody/trackers/controller_swap.hpp"
 #define SPARSEBODY_ALLOC_COUNTER_USE_ONLY  // test_recenter.cpp defines the operators
 #include "support/alloc_counter.hpp"
+#include "support/device_session.hpp"
 #include "support/standing_stream.hpp"
 
 using namespace sparsebody;
@@ -40,16 +41,7 @@ std::vector<double> decisions(const std::vector<trackers::TrackerFrame>& s, std:
   return at;
 }
 
-const std::vector<trackers::TrackerFrame>& device_session() {  // 01_01 at 72 Hz as a headset records it
-  static const std::vector<trackers::TrackerFrame> frames = [] {
-    const recordings::BvhClip clip = recordings::with_held_frame(recordings::read_bvh(SPARSEBODY_TEST_CLIP), 0.0, 2.5);
-    const pose::JointMap map = pose::JointMap::from_names(clip.skeleton, "01_01");
-    recordings::DeviceSynthesis opt;
-    opt.rate = 72;
-    return recordings::synthesize_device_trackers(clip, map, recordings::guess_units(clip.skeleton, map), opt).frames;
-  }();
-  return frames;
-}
+const std::vector<trackers::TrackerFrame>& device_session() { return sparsebody_test::device_session_01_01(); }
 
 }  // namespace
 
