@@ -150,3 +150,24 @@ TEST_CASE("LoBSTr and Neural3Points take controllers held in the other hands") {
       avatar::LoBSTrCompact::load(dir + "/lobstr_compact.weights.json"), "LoBSTr");
   check_swap<avatar::N3PDirect, avatar::N3PDirect::Weights, avatar::N3PConfig>(avatar::N3PDirect::load(dir + "/n3p"), "Neural3Points");
 }
+
+TEST_CASE("an exchange moves the calibration's controller offsets with the devices; reset() forgets both") {
+  const auto& s = device_session();
+  auto p = std::make_unique<avatar::LoBSTrCompact>(avatar::LoBSTrCompact::load(std::string(SPARSEBODY_WEIGHTS_DIR) + "/lobstr_compact.weights.json"));
+  features::Calibration c;  // an explicit calibration with distinct controller offsets (it survives reset())
+  c.offset[1] = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()));
+  c.offset[2] = Eigen::Quaterniond(Eigen::AngleAxisd(-0.5, Eigen::Vector3d::UnitZ()));
+  c.offset[0] = trackers::ControllerSwapDetector::openxr_head_offset();
+  p->set_calibration(c);
+  std::size_t i = 0;
+  for (; i < s.size() && p->controller_swaps() == 0; ++i) p->push(swapped(s[i]));
+  REQUIRE(p->controllers_swapped());
+  while (i < s.size() && p->push(swapped(s[i++])) == 0) {}  // until the first tick of the new roles has run
+  CHECK(p->calibration().offset[1].isApprox(c.offset[2]));
+  CHECK(p->calibration().offset[2].isApprox(c.offset[1]));
+  CHECK(p->calibration().position_offset[1].isApprox(c.position_offset[1]));  // the hands' grips stay
+  p->reset();
+  CHECK_FALSE(p->controllers_swapped());
+  CHECK(p->calibration().offset[1].isApprox(c.offset[1]));
+  CHECK(p->calibration().offset[2].isApprox(c.offset[2]));
+}

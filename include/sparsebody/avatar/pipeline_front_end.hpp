@@ -67,7 +67,11 @@ class PipelineFrontEnd {
     out_.resize(joints);
   }
   void reset_front_end() noexcept {
+    // The stream forgets the controllers' roles (a reset instance runs like a new one), so a
+    // calibration that followed an exchange (an explicit one survives reset) goes back with them.
+    if (stream_.controllers_swapped()) self().swap_controller_calibration();
     stream_.reset();
+    swaps_seen_ = stream_.controller_swaps();
     out_.reset();
     frames_ = 0;
   }

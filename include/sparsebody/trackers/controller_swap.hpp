@@ -52,7 +52,7 @@ class ControllerSwapDetector {
   explicit ControllerSwapDetector(ControllerSwapConfig cfg = {}, double quat_tolerance = 0.1) noexcept
       : cfg_(cfg), quat_tolerance_(quat_tolerance) {}
 
-  // Forgets the evidence and the swap (a new session).
+  // Forgets the evidence and the swap (a new session); count() keeps counting.
   void reset() noexcept {
     crossed_ = normal_ = 0;
     swapped_ = false;

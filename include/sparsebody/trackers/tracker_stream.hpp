@@ -52,7 +52,8 @@ class TrackerStream {
   void reset() noexcept {
     sanitizer_.reset();
     resampler_.reset();
-    recenter_.reset();  // the controllers' roles are kept: they belong to the devices, like a calibration
+    recenter_.reset();
+    swap_.reset();  // the controllers' roles too: a reset stream runs like a new one
   }
 
   double period() const noexcept { return resampler_.period(); }
