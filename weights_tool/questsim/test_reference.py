@@ -2,6 +2,7 @@
 import math
 
 import numpy as np
+import pytest
 import torch
 
 from weights_tool.questsim import layout, observation, policy
@@ -86,3 +87,34 @@ def test_policy_file_roundtrip(tmp_path):
     assert y64.shape == (7,)
     assert np.max(np.abs(y64)) <= 1.0
     assert np.max(np.abs(y64 - y32)) < 1e-5
+
+
+def test_trainer_starts_from_an_exported_policy(tmp_path):
+    # train.export -> train.init_from_json gives back the actor's weights (float32) and the
+    # observation statistics the export normalises with; a policy of another shape is refused.
+    from weights_tool.questsim import train
+    torch.manual_seed(3)
+    n_obs, n_act = 607, 48
+    src = train.ActorCritic(n_obs, n_act, 0.05)
+    with torch.no_grad():
+        for p in src.actor.parameters():
+            p.normal_(0, 0.1)
+    stats = train.RunningStats(n_obs)
+    stats.update(np.random.default_rng(1).normal(2.0, 3.0, (500, n_obs)))
+    path = str(tmp_path / "policy.json")
+    train.export(path, src, stats, n_obs, n_act, {"samples": 12345, "iterations": 7})
+    dst = train.ActorCritic(n_obs, n_act, 0.05)
+    got = train.RunningStats(n_obs)
+    it, samples = train.init_from_json(path, dst, got, n_obs, n_act)
+    assert (it, samples) == (7, 12345)
+    for a, b in zip(src.actor.parameters(), dst.actor.parameters()):
+        assert torch.equal(a, b)
+    x = torch.randn(4, n_obs)
+    assert torch.equal(src.actor(x)[0], dst.actor(x)[0])
+    want_std = stats.std(0.05).astype(np.float32)
+    want_mean = stats.mean.astype(np.float32)
+    want_mean[-1], want_std[-1] = 1.75, 1.0  # the export's fixed height feature
+    assert np.allclose(got.mean, want_mean, rtol=1e-6, atol=1e-6)
+    assert np.allclose(got.std(0.05), want_std, rtol=1e-5)
+    with pytest.raises(SystemExit, match="expected a questsim_policy 600 -> 48"):
+        train.init_from_json(path, train.ActorCritic(600, n_act, 0.05), train.RunningStats(600), 600, n_act)
