@@ -141,3 +141,41 @@ TEST_CASE("no valid input yet: no output") {
   r.p.push(f);
   CHECK_FALSE(r.p.has_output());
 }
+
+TEST_CASE("a controller put down out of reach is held, and taken back without a jump or a reset") {
+  Run r;
+  trackers::TrackerSanitizer san;
+  auto on_table = [](trackers::TrackerFrame f) {  // the left controller 2 m from the headset, on a table
+    f.pose[1].position = trackers::to_xr(Eigen::Vector3d(trackers::to_eigen(f.pose[0].position) + Eigen::Vector3d(2.0, -0.8, 0.5)));
+    return f;
+  };
+  // from the first frame: never in a hand yet, so at the headset (the sanitizer's "never seen")
+  for (std::size_t i = 0; i < 20; ++i) {
+    const auto& s = san.process(on_table(r.frames[i]), 1.0 / 30);
+    CHECK_FALSE(s.measured[1]);
+    CHECK(s.measured[2]);
+    CHECK((s.pose[1].position - s.pose[0].position).norm() < 1e-9);
+  }
+  // picked up: measured at once, no reset
+  for (std::size_t i = 20; i < 40; ++i) {
+    const auto& s = san.process(r.frames[i], 1.0 / 30);
+    CHECK(s.measured[1]);
+    CHECK_FALSE(s.reset);
+  }
+  // put down again: held where it was last in a hand
+  for (std::size_t i = 40; i < 50; ++i) {
+    const auto& s = san.process(on_table(r.frames[i]), 1.0 / 30);
+    CHECK_FALSE(s.measured[1]);
+    CHECK((s.pose[1].position - trackers::to_eigen(r.frames[39].pose[1].position)).norm() < 1e-6);
+  }
+  CHECK(san.process(r.frames[50], 1.0 / 30).measured[1]);
+  CHECK_FALSE(san.last().reset);
+  trackers::SanitizerConfig off;  // the check off: the table is where the hand is
+  off.max_controller_distance = 0;
+  trackers::TrackerSanitizer all(off);
+  CHECK(all.process(on_table(r.frames[0]), 1.0 / 30).measured[1]);
+  for (std::size_t i = 0; i < r.frames.size(); ++i) {
+    r.p.push(i < 20 || (i >= 40 && i < 50) ? on_table(r.frames[i]) : r.frames[i]);
+    REQUIRE(finite_pose(r.p));
+  }
+}

@@ -4,6 +4,8 @@
 //   - a tracker marked invalid: its last good pose is held (velocities become zero, so the
 //     network's input decays to "standing still"); the pelvis, if lost, follows the headset's
 //     horizontal motion from the moment it was lost;
+//   - a controller further than `max_controller_distance` (1.5 m) from the headset: not in a hand
+//     (put down, dropped), held like an invalid one;
 //   - a position jump over `max_jump` (1 m) in one model frame: treated as a glitch, the frame is
 //     rejected as invalid; after `relock_frames` consecutive rejections the new place is accepted
 //     and the caller is told to reset (the tracking origin moved);
@@ -27,6 +29,10 @@ struct SanitizerConfig {
   double max_hold = 0.5;        // seconds of headset loss before a reset
   int relock_frames = 3;        // consecutive jumped frames accepted as a new origin
   double quat_tolerance = 0.1;  // |1 - |q|| above this is invalid
+  // m: a controller further than this from the headset measured in the same frame is in no hand
+  // (put down on a table, dropped): held like a lost one. 1.5 m is beyond a 2.2 m user's reach
+  // (Neural3Points' controller_max_distance, its own check, is the same). <= 0: off.
+  double max_controller_distance = 1.5;
   RecenterConfig recenter{};    // the tracking space turned / shifted between two frames (TrackerStream)
   ControllerSwapConfig controller_swap{};  // left / right controllers held in the other hands (TrackerStream)
 };
@@ -47,6 +53,7 @@ class TrackerSanitizer {
     have_.fill(false);
     held_.fill(0.0);
     jumps_.fill(0);
+    away_.fill(false);
     have_head_prev_ = false;
   }
 
@@ -59,7 +66,15 @@ class TrackerSanitizer {
     for (int k = 0; k < kTrackerCount; ++k) {
       PoseD p;
       bool ok = in.valid[k] && check(in.pose[k], p);
-      if (ok && have_[k] && (p.position - last_[k].position).norm() > cfg_.max_jump) {
+      if (ok && (k == 1 || k == 2) && cfg_.max_controller_distance > 0 && out_.measured[0] &&
+          !((p.position - last_[0].position).norm() <= cfg_.max_controller_distance)) {
+        ok = false;  // in no hand (the headset, k = 0, was measured above in this frame)
+        away_[k] = true;
+      }
+      if (ok && away_[k]) {  // back in a hand: wherever it was put down is no glitch to hold
+        away_[k] = false;
+        jumps_[k] = 0;
+      } else if (ok && have_[k] && (p.position - last_[k].position).norm() > cfg_.max_jump) {
         if (++jumps_[k] < cfg_.relock_frames) ok = false;
         else out_.reset = true;  // the tracker really moved (recentred space): accept and restart
       } else if (ok) {
@@ -104,6 +119,7 @@ class TrackerSanitizer {
   std::array<bool, kTrackerCount> have_{};
   std::array<double, kTrackerCount> held_{};
   std::array<int, kTrackerCount> jumps_{};
+  std::array<bool, kTrackerCount> away_{};  // a controller out of every hand's reach (max_controller_distance)
   Eigen::Vector3d head_prev_ = Eigen::Vector3d::Zero();
   bool have_head_prev_ = false;
   SanitizedFrame out_;
