@@ -152,11 +152,10 @@ template <class Session>  // QuestSimSessionDefault / F16 / Q8
 int run_questsim(const Options& o, Input& in) {
   if (o.mode != avatar::RunMode::Streaming) std::printf("note    --mode window is LoBSTr-only; QuestSim always streams\n");
   const auto w = Session::load(o.weights);
-  avatar::QuestSimSessionConfig cfg;
+  Session pipe(w);
   // Trackers at the joints face +Z (the body convention), not an OpenXR headset's -Z: the
-  // controller-swap check, which reads the heading from the headset, would see every hand crossed.
-  if (in.at_joints) cfg.questsim.sanitizer.controller_swap.enabled = false;
-  Session pipe(w, cfg);
+  // controller-swap check, which reads the heading from the headset, is told so.
+  if (in.at_joints) pipe.pipeline().set_body_convention(true);
   auto set_scale = [&](double s) { pipe.set_user_scale(s); };
   if (!fit_user(o, in, pipe, set_scale)) return 1;
   const auto& model = pipe.pipeline().simulator().model();

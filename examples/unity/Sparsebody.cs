@@ -133,6 +133,7 @@ public static class Native {
   public static extern Status sb_pipeline_joint_parents(PipelineHandle p, [Out] int[] parents, int capacity);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_pipeline_frame_rate(PipelineHandle p, out double fps);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_pipeline_recalibrate(PipelineHandle p);
+  [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_pipeline_stream_events(PipelineHandle p, out int recentres, out int controllerSwaps, out int controllersSwapped);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_pipeline_calibrate_frame(PipelineHandle p, ref TrackerFrame f);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_pipeline_set_joint_calibration(PipelineHandle p, double scale);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_pipeline_calibration(PipelineHandle p, ref CalibrationReport r);
@@ -229,6 +230,10 @@ public sealed class Pipeline : IDisposable {
   }
   public double FrameRate { get { double f; Check(Native.sb_pipeline_frame_rate(Handle, out f), Handle); return f; } }
   public void Recalibrate() { Check(Native.sb_pipeline_recalibrate(Handle), Handle); }
+  // Recentred tracking spaces found so far, and the controllers found in the other hands (exchanged while ControllersSwapped).
+  public int Recentres { get { int r, c, w; Check(Native.sb_pipeline_stream_events(Handle, out r, out c, out w), Handle); return r; } }
+  public int ControllerSwaps { get { int r, c, w; Check(Native.sb_pipeline_stream_events(Handle, out r, out c, out w), Handle); return c; } }
+  public bool ControllersSwapped { get { int r, c, w; Check(Native.sb_pipeline_stream_events(Handle, out r, out c, out w), Handle); return w != 0; } }
   public void CalibrateFrame(ref TrackerFrame f) { Check(Native.sb_pipeline_calibrate_frame(Handle, ref f), Handle); }
   public void SetJointCalibration(double scale) { Check(Native.sb_pipeline_set_joint_calibration(Handle, scale), Handle); }
   public CalibrationReport Calibration {

@@ -221,6 +221,8 @@ TEST_CASE("pipeline handles: NULL, foreign, destroyed, a weights handle, in ever
     CHECK(sb_pipeline_calibrate_frame(h, &f) == want);
     CHECK(sb_pipeline_set_joint_calibration(h, 1.0) == want);
     CHECK(sb_pipeline_calibration(h, &r) == want);
+    int32_t ev[3];
+    CHECK(sb_pipeline_stream_events(h, ev, ev + 1, ev + 2) == want);
     if (h) CHECK(sb_pipeline_destroy(h) == SB_ERR_BAD_HANDLE);
     if (h != handles[3]) CHECK(std::strlen(sb_last_error(h)) > 0);  // not a handle: this thread's message
   }
@@ -331,6 +333,45 @@ TEST_CASE("skeleton queries: NULL, range, capacity") {
   CHECK(sb_pipeline_frame_rate(p, &fps) == SB_OK);
   CHECK(fps == cpp.meta().frame_rate);
   sb_pipeline_destroy(p);
+}
+
+TEST_CASE("stream events: controllers held in the other hands are found and reported, reset forgets them") {
+  // A user standing 3 s with the headset's "left" controller in the right hand (OpenXR: identity
+  // headset faces -Z, +X is the user's right) and the other in the left, arms hanging.
+  for (int kind : {SB_PIPELINE_LOBSTR, SB_PIPELINE_N3P_DIRECT, SB_PIPELINE_N3P_PHYSICS, SB_PIPELINE_QUESTSIM}) {
+    INFO("pipeline " << kind);
+    sb_pipeline* p = create(kind);
+    REQUIRE(p);
+    int32_t rec = -1, swaps = -1, now = -1;
+    CHECK(sb_pipeline_stream_events(p, nullptr, &swaps, &now) == SB_ERR_NULL);
+    REQUIRE(sb_pipeline_stream_events(p, &rec, &swaps, &now) == SB_OK);
+    CHECK(rec == 0);
+    CHECK(swaps == 0);
+    CHECK(now == 0);
+    for (int i = 0; i < 216; ++i) {
+      sb_tracker_frame f{};
+      f.struct_size = sizeof f;
+      f.time = i / 72.0;
+      const float sway = 0.003f * std::sin(0.1f * i);
+      const float pos[4][3] = {{sway, 1.60f, 0}, {0.22f, 1.05f, -0.1f}, {-0.22f, 1.05f, -0.1f}, {0, 0.95f, 0}};
+      for (int k = 0; k < 4; ++k) {
+        f.pose[k].position = {pos[k][0], pos[k][1], pos[k][2]};
+        f.pose[k].orientation = {0, 0, 0, 1};
+      }
+      f.valid = SB_VALID_HEAD | SB_VALID_LEFT_HAND | SB_VALID_RIGHT_HAND | SB_VALID_PELVIS;
+      int32_t steps = 0;
+      REQUIRE(sb_pipeline_push(p, &f, &steps) == SB_OK);
+    }
+    REQUIRE(sb_pipeline_stream_events(p, &rec, &swaps, &now) == SB_OK);
+    CHECK(rec == 0);
+    CHECK(swaps == 1);
+    CHECK(now == 1);
+    REQUIRE(sb_pipeline_reset(p) == SB_OK);
+    REQUIRE(sb_pipeline_stream_events(p, &rec, &swaps, &now) == SB_OK);
+    CHECK(swaps == 1);  // counted since creation
+    CHECK(now == 0);
+    sb_pipeline_destroy(p);
+  }
 }
 
 TEST_CASE("calibration calls: bad frames and scales; explicit, joint and automatic calibration reported") {

@@ -162,6 +162,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       check(sb_pipeline_joint_parents(p, parents, static_cast<int32_t>(b.u8())), p, "joint_parents");
       double fps = 0;
       check(sb_pipeline_frame_rate(p, &fps), p, "frame_rate");
+      int32_t ev[3];
+      check(sb_pipeline_stream_events(p, ev, ev + 1, ev + 2), p, "stream_events");
     } else {
       // NULL arguments and a NULL handle: errors, never a crash
       check(sb_pipeline_push(p, nullptr, nullptr), p, "push(NULL)");

@@ -180,6 +180,12 @@ class QuestSimPipeline {
   }
   // The resampler and sanitizer (last_sanitized(): the last tick's devices).
   const trackers::TrackerStream& tracker_stream() const noexcept { return stream_; }
+  // Trackers in the body convention (a mocap clip's joints, facing +Z) instead of OpenXR devices
+  // (facing -Z): the policy reads them as they are, but the stream's controller-swap check takes
+  // its heading from the headset's orientation (trackers/controller_swap.hpp).
+  void set_body_convention(bool on) noexcept {
+    stream_.set_head_offset(on ? Eigen::Quaterniond::Identity() : trackers::ControllerSwapDetector::openxr_head_offset());
+  }
 
   // Back to the constructed state: no input seen, the next frame stands the character under the
   // headset (the counters of falls, resets and failures are kept: they describe the session).

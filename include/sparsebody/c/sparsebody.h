@@ -210,6 +210,15 @@ SPARSEBODY_API sb_status sb_pipeline_calibrate_frame(sb_pipeline* p, const sb_tr
 SPARSEBODY_API sb_status sb_pipeline_set_joint_calibration(sb_pipeline* p, double scale);
 SPARSEBODY_API sb_status sb_pipeline_calibration(sb_pipeline* p, sb_calibration_report* report);
 
+/* --- what the tracker stream found ------------------------------------------------------------- */
+/* Since creation: recentred tracking spaces (every tracker turned / shifted together between two
+ * frames; each restarted the model there) and the times the left and right controllers were found in
+ * the other hands and exchanged (symmetric controllers whose roles the runtime gave the wrong way
+ * round); controllers_swapped: 1 while they are exchanged, else 0 (sb_pipeline_reset forgets it).
+ * SB_ERR_NULL when any pointer is NULL. */
+SPARSEBODY_API sb_status sb_pipeline_stream_events(sb_pipeline* p, int32_t* recentres, int32_t* controller_swaps,
+                                                   int32_t* controllers_swapped);
+
 #ifdef __cplusplus
 }
 #endif

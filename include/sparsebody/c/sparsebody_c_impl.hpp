@@ -70,6 +70,9 @@ struct PipelineBase {
   virtual void recalibrate() noexcept = 0;
   virtual void set_joint_calibration(double scale) noexcept = 0;
   virtual void reset() noexcept = 0;
+  virtual int recentres() const noexcept = 0;
+  virtual int controller_swaps() const noexcept = 0;
+  virtual bool controllers_swapped() const noexcept = 0;
 };
 
 template <class P>
@@ -122,6 +125,7 @@ struct PipelineModel final : PipelineBase {
     // the demo's BVH path: identity offsets (trackers at the joints), only the size
     if constexpr (kQuestSim) {
       p.set_user_scale(scale);  // QuestSim: the avatar's size (a stature outside 1.0-2.4 m is ignored)
+      p.pipeline().set_body_convention(true);  // trackers at the joints face +Z (the swap check's heading)
     } else if constexpr (std::is_same_v<P, LoBSTr>) {
       features::Calibration c;
       c.scale = scale;
@@ -136,6 +140,9 @@ struct PipelineModel final : PipelineBase {
     p.reset();
     time_ = std::numeric_limits<double>::quiet_NaN();
   }
+  int recentres() const noexcept override { return p.recentres(); }
+  int controller_swaps() const noexcept override { return p.controller_swaps(); }
+  bool controllers_swapped() const noexcept override { return p.controllers_swapped(); }
 };
 
 }  // namespace sparsebody::capi
@@ -569,6 +576,21 @@ SPARSEBODY_API sb_status sb_pipeline_frame_rate(sb_pipeline* p, double* fps) {
   try {
   if (!fps) return c::fail(p->error, SB_ERR_NULL, "sb_pipeline_frame_rate: fps is NULL");
   *fps = p->impl->frame_rate();
+  return SB_OK;
+  }
+  SB_CATCH_ALL(p->error)
+}
+
+SPARSEBODY_API sb_status sb_pipeline_stream_events(sb_pipeline* p, int32_t* recentres, int32_t* controller_swaps,
+                                                   int32_t* controllers_swapped) {
+  namespace c = sparsebody::capi;
+  SB_CHECK_PIPELINE(p);
+  try {
+  if (!recentres || !controller_swaps || !controllers_swapped)
+    return c::fail(p->error, SB_ERR_NULL, "sb_pipeline_stream_events: an output pointer is NULL");
+  *recentres = p->impl->recentres();
+  *controller_swaps = p->impl->controller_swaps();
+  *controllers_swapped = p->impl->controllers_swapped() ? 1 : 0;
   return SB_OK;
   }
   SB_CATCH_ALL(p->error)
