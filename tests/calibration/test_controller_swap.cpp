@@ -61,6 +61,23 @@ TEST_CASE("controller swap detector: crossed hanging hands, and nothing else") {
     CHECK(at[0] < 15.0);
     MESSAGE("controllers changed hands 5 s into a session: found at " << at[0] << " s");
   }
+  {
+    // put down on a table for 2 s (both 2 m from the headset), picked up the other way round 8 s in:
+    // the tallies start again at the put-down, so it is found 1.5 s after the pick-up
+    auto table = walk;
+    for (std::size_t i = 72 * 6; i < 72 * 8; ++i)
+      for (int k = 1; k < 3; ++k)
+        table[i].pose[k].position = trackers::to_xr(Eigen::Vector3d(trackers::to_eigen(table[i].pose[0].position) + Eigen::Vector3d(2, -0.8, 0)));
+    const auto at = decisions(table, 72 * 8);
+    REQUIRE(at.size() == 1);
+    CHECK(at[0] == doctest::Approx(9.5).epsilon(0.03));
+    MESSAGE("controllers put down 6-8 s and picked up the other way round: found at " << at[0] << " s");
+    trackers::ControllerSwapConfig no_restart;
+    no_restart.put_down_time = 1e9;
+    const auto late = decisions(table, 72 * 8, no_restart);
+    REQUIRE(late.size() == 1);
+    CHECK(late[0] > at[0] + 2.0);
+  }
   trackers::ControllerSwapConfig off;
   off.enabled = false;
   CHECK(decisions(walk, 0, off).empty());

@@ -17,7 +17,9 @@
 // m, min_apart 0.2 m): 0.13 s of crossed frames in all (one clip), against 659 s of normal ones.
 // Controllers swapped from the start are found after `evidence` seconds of hanging hands; a swap in
 // the middle of a session once the tallies have forgotten enough of the normal frames (~8 s into a
-// walk, ~14 s after a long one) (tests/calibration/test_controller_swap.cpp).
+// walk, ~14 s after a long one), unless the controllers were put down first (both out of reach or
+// lost for put_down_time: the tallies start again, and a swapped pick-up is found after `evidence`)
+// (tests/calibration/test_controller_swap.cpp).
 // TrackerStream applies the swap before anything else sees the frame, restarts the tick clock at
 // the decision (a 0.6 m jump of both hands is no motion) and counts it; the kinematic pipelines
 // swap their calibration's controller orientation offsets with the devices (Calibration::
@@ -42,6 +44,11 @@ struct ControllerSwapConfig {
   double share = 0.75;          // ... and at least this share of all evidence
   double memory = 10.0;         // s: time constant of the leaky tallies
   double max_dt = 0.25;         // s: a longer step between frames adds no evidence
+  // Both controllers out of every hand (invalid, or further than put_down_distance from the headset)
+  // for put_down_time: they were put down, and may be picked up the other way round, so the tallies
+  // start again (a swap at the pick-up is then found after `evidence`, not after forgetting).
+  double put_down_distance = 1.5;  // m (the sanitizer's max_controller_distance)
+  double put_down_time = 1.0;      // s
 };
 
 class ControllerSwapDetector {
@@ -54,7 +61,7 @@ class ControllerSwapDetector {
 
   // Forgets the evidence and the swap (a new session); count() keeps counting.
   void reset() noexcept {
-    crossed_ = normal_ = 0;
+    crossed_ = normal_ = put_down_ = 0;
     swapped_ = false;
     have_time_ = false;
   }
@@ -71,6 +78,8 @@ class ControllerSwapDetector {
     const double keep = std::exp(-dt / cfg_.memory);
     crossed_ *= keep;
     normal_ *= keep;
+    put_down_ = put_down(f) ? put_down_ + dt : 0.0;
+    if (put_down_ >= cfg_.put_down_time) crossed_ = normal_ = 0;
     const int side = crossing(f, head_offset);  // of the frame as the pipelines would see it (swapped or not)
     if (side < 0) crossed_ += dt;
     if (side > 0) normal_ += dt;
@@ -89,6 +98,16 @@ class ControllerSwapDetector {
   }
 
  private:
+  // Neither controller in a hand: invalid, unusable or out of reach of a measured headset.
+  bool put_down(const TrackerFrame& f) const noexcept {
+    PoseD h, c;
+    if (!f.valid[0] || !checked_pose(f.pose[0], quat_tolerance_, h)) return false;  // no headset: nothing to judge by
+    for (int k = 1; k < 3; ++k)
+      if (f.valid[k] && checked_pose(f.pose[k], quat_tolerance_, c) && (c.position - h.position).norm() <= cfg_.put_down_distance)
+        return false;
+    return true;
+  }
+
   // -1 crossed, +1 normal, 0 no evidence; the roles as apply() would give them.
   int crossing(const TrackerFrame& f, const Eigen::Quaterniond& head_offset) const noexcept {
     PoseD h, a, b;
@@ -113,6 +132,7 @@ class ControllerSwapDetector {
   ControllerSwapConfig cfg_;
   double quat_tolerance_ = 0.1;
   double crossed_ = 0, normal_ = 0;  // leaky seconds of evidence
+  double put_down_ = 0;              // s both controllers have been out of every hand
   double last_time_ = 0;
   bool have_time_ = false;
   bool swapped_ = false;
