@@ -1,29 +1,28 @@
-// Swapped controllers: symmetric controllers (HTC Vive wands, many trackers used as hands) get
-// their left / right roles from the runtime, which assigns them by where they were when turned
-// on, so a user often holds the "left" one in the right hand. The networks then see the hands
-// crossed for the whole session, and the avatar's arms cross.
-// ControllerSwapDetector watches, per input frame, the controllers' sideways offsets in the
-// headset's heading frame: x_k = (p_k - p_head) . left (left = world up x the headset's
-// horizontal forward). Forward is the body's: Z of the calibrated headset q_head o_head, so the
-// detector takes the pipeline's head offset o_head (a half turn about Y before calibration: OpenXR
-// devices look along -Z; the identity for trackers already in the body convention). Frames count as evidence only where crossing the hands is awkward and rare:
-// the headset upright, both controllers valid, both at least `min_below` under the headset (hands
-// at the sides or the hips, not in front of the chest) and within `max_horizontal` of it (held,
-// not lying on a table), and apart sideways by more than `min_apart`. Each such frame is "crossed"
-// (x_left - x_right < -min_apart) or "normal" (> min_apart); both tallies are leaky sums of
-// seconds that forget with time constant `memory`. The roles are swapped when the crossed tally
-// reaches `evidence` seconds and at least `share` of both (and swapped back the same way).
-// Measured on the 301 validation clips and the 3 CMU clips as device sessions (72 Hz; min_below 0.4
-// m, min_apart 0.2 m): 0.13 s of crossed frames in all (one clip), against 659 s of normal ones.
-// Controllers swapped from the start are found after `evidence` seconds of hanging hands; a swap in
-// the middle of a session once the tallies have forgotten enough of the normal frames (~8 s into a
-// walk, ~14 s after a long one), unless the controllers were put down first (both out of reach or
-// lost for put_down_time: the tallies start again, and a swapped pick-up is found after `evidence`)
-// (tests/calibration/test_controller_swap.cpp).
-// TrackerStream applies the swap before anything else sees the frame, restarts the tick clock at
-// the decision (a 0.6 m jump of both hands is no motion) and counts it; the kinematic pipelines
-// swap their calibration's controller orientation offsets with the devices (Calibration::
-// swap_controllers). Off with enabled = false. No allocation.
+// Swapped controllers: symmetric controllers (HTC Vive wands, trackers used as hands) get their
+// left / right roles from the runtime, which assigns them by where they were when turned on, so a
+// user often holds the "left" one in the right hand. The networks then see crossed hands for the
+// whole session, and the avatar's arms cross.
+// ControllerSwapDetector looks, per input frame, at each controller's sideways offset in the
+// headset's heading frame: x_k = (p_k - p_head) . left, left = world up x the horizontal forward.
+// Forward is the body's: Z of the calibrated headset q_head o_head, so the detector takes the
+// pipeline's o_head (a half turn about Y before calibration, as OpenXR devices look along -Z; the
+// identity for trackers already in the body convention).
+// Evidence comes only from frames where crossing the hands is awkward and rare: the headset
+// upright, both controllers valid, at least `min_below` under the headset (hands at the sides or
+// hips, not at the chest), within `max_horizontal` of it (held, not on a table) and more than
+// `min_apart` apart sideways. Such a frame is "crossed" (x_left - x_right < -min_apart) or "normal"
+// (> min_apart); each tally is a leaky sum of seconds (time constant `memory`). The roles are
+// exchanged when the crossed tally reaches `evidence` and `share` of both, and back the same way.
+// Both controllers lost or out of reach for `put_down_time` (put down: they may be picked up the
+// other way round) start the tallies again.
+// On the 301 validation and 3 CMU clips as device sessions: 0.13 s of crossed frames in all (one
+// clip) against 659 s of normal ones. Found `evidence` (~1.6 s) after the start of a swapped
+// session or a swapped pick-up; a swap in mid-session without a put-down once the normal frames
+// are forgotten enough (~8 s into a walk) (tests/calibration/test_controller_swap.cpp).
+// TrackerStream applies the exchange before anything else sees the frame, restarts the tick clock
+// at the decision (both hands jump ~0.5 m) and counts it; the kinematic pipelines exchange their
+// calibration's controller orientation offsets with the devices (Calibration::swap_controllers).
+// Off with enabled = false. No allocation.
 #pragma once
 #include <algorithm>
 #include <cmath>
