@@ -191,10 +191,9 @@ def test_joint_roles_of_common_rigs():
             skeleton.map_roles(r["names"])
 
 
-def test_z_up_clip_reads_as_y_up(tmp_path):
-    """skeleton.up_axis_turn, the twin of recordings/bvh_up_axis.hpp (tests/pipeline/test_bvh_up_axis.cpp):
-    the CMU clip 01_01 written with a Z-up world reads back with the original's world positions."""
-    src = "/usr/share/assimp/models/BVH/01_01.bvh"  # assimp-testmodels, installed by .ci
+def write_z_up(src, dst):
+    """The BVH clip src (root channels X/Y/Z position, Z/Y/X rotation) written to dst with its world
+    turned +Y -> +Z (a Z-up export, as AMASS / Blender write them); returns the turn."""
     b = bvh.load(src)
     assert [c.lower() for c in b.channels[0]] == ["xposition", "yposition", "zposition", "zrotation", "yrotation", "xrotation"]
     ax = rotations.axis_angle
@@ -207,8 +206,17 @@ def test_z_up_clip_reads_as_y_up(tmp_path):
         m[f, 3:6] = np.degrees([np.arctan2(R[1, 0], R[0, 0]), np.arcsin(-R[2, 0]), np.arctan2(R[2, 1], R[2, 2])])
     lines = open(src).read().splitlines()
     k = next(i for i, l in enumerate(lines) if l.strip().startswith("Frame Time"))
+    with open(dst, "w") as f:
+        f.write("\n".join(lines[:k + 1]) + "\n" + "\n".join(" ".join(repr(float(v)) for v in row) for row in m) + "\n")
+    return T
+
+
+def test_z_up_clip_reads_as_y_up(tmp_path):
+    """skeleton.up_axis_turn, the twin of recordings/bvh_up_axis.hpp (tests/pipeline/test_bvh_up_axis.cpp):
+    the CMU clip 01_01 written with a Z-up world reads back with the original's world positions."""
+    src = "/usr/share/assimp/models/BVH/01_01.bvh"  # assimp-testmodels, installed by .ci
     dst = tmp_path / "z_up.bvh"
-    dst.write_text("\n".join(lines[:k + 1]) + "\n" + "\n".join(" ".join(repr(float(v)) for v in row) for row in m) + "\n")
+    T = write_z_up(src, str(dst))
     a, z = skeleton.Clip(src), skeleton.Clip(str(dst))
     assert a.up_turn is None and z.up_turn is not None
     assert np.allclose(z.up_turn @ T, np.eye(3), atol=1e-12)

@@ -94,3 +94,20 @@ def test_demo_metrics_equal_the_demos_printed_metrics(sb, demo, tmp_path, opts):
     assert set(printed) == set(cpp_eval.KEYS.values()) - {"rot"}  # CMU skeleton: rotation error n/a
     for k, v in printed.items():
         assert abs(vals[k] - v) <= 0.005 + 1e-9, (k, vals[k], v)
+
+
+def test_demo_metrics_of_a_z_up_clip_equal_the_y_up_originals(sb, tmp_path):  # noqa: F811
+    """demo_metrics reads the clip as read_input does (recordings/clip_session.hpp): a Z-up copy of
+    01_01 is turned to Y-up and gives the original's metrics (before, demo_metrics did not turn it)."""
+    from weights_tool.lobstr import cpp_eval
+    from weights_tool.tests.test_lobstr_pipeline import write_z_up
+    need_clip()
+    z_up = str(tmp_path / "01_01_z_up.bvh")
+    write_z_up(CLIP, z_up)
+    for opts in (["--model", "lobstr"], ["--model", "n3p", "--devices", "--device-seed", "3"]):
+        a, fa = cpp_eval.module_metrics(sb, CLIP, opts)
+        b, fb = cpp_eval.module_metrics(sb, z_up, opts)
+        assert fa == fb > 500
+        for k in a:
+            assert abs(a[k] - b[k]) < 1e-3 or (np.isnan(a[k]) and np.isnan(b[k])), (opts, k, a[k], b[k])
+        assert a["mpjpe"] > 1.0  # cm: a real error, not a comparison of nothing
