@@ -418,15 +418,10 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
 
   // Controller k of the raw frame when it is usable (see the bad-input rules above).
   bool controller(const trackers::TrackerFrame& f, int k, const Eigen::Vector3d& head, trackers::PoseD& out) const noexcept {
-    if (!f.valid[k]) return false;
-    const Eigen::Vector3d p = trackers::to_eigen(f.pose[k].position);
-    const Eigen::Quaterniond q = trackers::to_eigen(f.pose[k].orientation);
-    if (!p.allFinite() || !q.coeffs().allFinite()) return false;
-    const double n = q.norm();
-    if (!(std::abs(n - 1.0) <= cfg_.sanitizer.quat_tolerance)) return false;
-    if (!((p - head).norm() <= cfg_.controller_max_distance)) return false;
-    out.position = p;
-    out.orientation = Eigen::Quaterniond(q.coeffs() / n);
+    trackers::PoseD p;  // the sanitizer's test of a pose (finite, |q| near 1, renormalised)
+    if (!f.valid[k] || !trackers::checked_pose(f.pose[k], cfg_.sanitizer.quat_tolerance, p)) return false;
+    if (!((p.position - head).norm() <= cfg_.controller_max_distance)) return false;
+    out = p;
     return true;
   }
 

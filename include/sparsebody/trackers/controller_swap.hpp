@@ -25,6 +25,7 @@
 // Off with enabled = false. No allocation.
 #pragma once
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <utility>
 
@@ -77,9 +78,13 @@ class ControllerSwapDetector {
     const double keep = std::exp(-dt / cfg_.memory);
     crossed_ *= keep;
     normal_ *= keep;
-    put_down_ = put_down(f) ? put_down_ + dt : 0.0;
+    // each pose checked once: headset, left, right as recorded
+    std::array<PoseD, 3> p;
+    std::array<bool, 3> ok{};
+    for (int k = 0; k < 3; ++k) ok[k] = f.valid[k] && checked_pose(f.pose[k], quat_tolerance_, p[k]);
+    put_down_ = put_down(p, ok) ? put_down_ + dt : 0.0;
     if (put_down_ >= cfg_.put_down_time) crossed_ = normal_ = 0;
-    const int side = crossing(f, head_offset);  // of the frame as the pipelines would see it (swapped or not)
+    const int side = crossing(p, ok, head_offset);  // of the frame as the pipelines would see it (swapped or not)
     if (side < 0) crossed_ += dt;
     if (side > 0) normal_ += dt;
     if (crossed_ < cfg_.evidence || crossed_ < cfg_.share * (crossed_ + normal_)) return false;
@@ -98,21 +103,18 @@ class ControllerSwapDetector {
 
  private:
   // Neither controller in a hand: invalid, unusable or out of reach of a measured headset.
-  bool put_down(const TrackerFrame& f) const noexcept {
-    PoseD h, c;
-    if (!f.valid[0] || !checked_pose(f.pose[0], quat_tolerance_, h)) return false;  // no headset: nothing to judge by
+  bool put_down(const std::array<PoseD, 3>& p, const std::array<bool, 3>& ok) const noexcept {
+    if (!ok[0]) return false;  // no headset: nothing to judge by
     for (int k = 1; k < 3; ++k)
-      if (f.valid[k] && checked_pose(f.pose[k], quat_tolerance_, c) && (c.position - h.position).norm() <= cfg_.put_down_distance)
-        return false;
+      if (ok[k] && (p[k].position - p[0].position).norm() <= cfg_.put_down_distance) return false;
     return true;
   }
 
   // -1 crossed, +1 normal, 0 no evidence; the roles as apply() would give them.
-  int crossing(const TrackerFrame& f, const Eigen::Quaterniond& head_offset) const noexcept {
-    PoseD h, a, b;
-    if (!f.valid[0] || !f.valid[1] || !f.valid[2] || !checked_pose(f.pose[0], quat_tolerance_, h) ||
-        !checked_pose(f.pose[1], quat_tolerance_, a) || !checked_pose(f.pose[2], quat_tolerance_, b))
-      return 0;
+  int crossing(const std::array<PoseD, 3>& p, const std::array<bool, 3>& ok, const Eigen::Quaterniond& head_offset) const noexcept {
+    if (!ok[0] || !ok[1] || !ok[2]) return 0;
+    const PoseD& h = p[0];
+    PoseD a = p[1], b = p[2];
     if (swapped_) std::swap(a, b);
     const Eigen::Matrix3d R = (h.orientation * head_offset).toRotationMatrix();  // the body's facing frame
     if (R(1, 1) < 0.8) return 0;  // upright
