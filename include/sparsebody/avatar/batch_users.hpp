@@ -1,13 +1,16 @@
 // The users of a many-avatar batch (avatar/lobstr_batch.hpp, n3p_batch.hpp): n pipelines built
 // from one weight set and, per user, the batch's IO buffers (each network's normalised input and
-// output). Allocated once at construction; n outside 1..nn::kBatchMax is refused there.
+// output) and the model ticks of the user's last input frame (push). Allocated once at
+// construction; n outside 1..nn::kBatchMax is refused there.
 #pragma once
+#include <algorithm>
 #include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "sparsebody/nn/panel_matrix.hpp"
+#include "sparsebody/trackers/types.hpp"
 
 namespace sparsebody::avatar {
 
@@ -22,15 +25,60 @@ class BatchUsers {
                                   std::to_string(nn::kBatchMax));
     for (int i = 0; i < n; ++i) users_.push_back(std::make_unique<Pipeline>(args...));
     io_ = std::make_unique<IO[]>(static_cast<std::size_t>(n));
+    per_user_ = users_[0]->tracker_stream().max_ticks_per_push();
+    ticks_ = std::make_unique<Tick[]>(static_cast<std::size_t>(n) * static_cast<std::size_t>(per_user_));
   }
   int size() const noexcept { return static_cast<int>(users_.size()); }
   Pipeline& operator[](int i) noexcept { return *users_[static_cast<std::size_t>(i)]; }
   const Pipeline& operator[](int i) const noexcept { return *users_[static_cast<std::size_t>(i)]; }
   IO& io(int i) noexcept { return io_[static_cast<std::size_t>(i)]; }
 
+  // frames[i]: user i's input frame at any rate, as Pipeline::push takes it (resampling, recentre
+  // and controller-swap checks in each user's own stream). Each user's frame completes 0..k model
+  // ticks; round r steps, in one call run(who, m, ticks, gaps), the m users with more than r ticks:
+  // ticks[k] and gaps[k] are user who[k]'s (r+1)-th tick and its restart flag. Every user sees what
+  // push(frames[i]) would do to it. Returns the number of user steps run.
+  template <class Run>
+  int push(const trackers::TrackerFrame* frames, Run&& run) noexcept {
+    int count[nn::kBatchMax];
+    int most = 0, steps = 0;
+    for (int i = 0; i < size(); ++i) {
+      Tick* mine = ticks_.get() + static_cast<std::size_t>(i) * static_cast<std::size_t>(per_user_);
+      int& c = count[i] = 0;
+      const int cap = per_user_;
+      users_[static_cast<std::size_t>(i)]->push_ticks(frames[i], [mine, &c, cap](const trackers::TrackerFrame& t, bool gap) {
+        if (c < cap) mine[c++] = {t, gap};  // cap is the resampler's bound: never reached
+      });
+      most = std::max(most, c);
+    }
+    for (int r = 0; r < most; ++r) {
+      int who[nn::kBatchMax];
+      const trackers::TrackerFrame* tick[nn::kBatchMax];
+      bool gap[nn::kBatchMax];
+      int m = 0;
+      for (int i = 0; i < size(); ++i) {
+        if (count[i] <= r) continue;
+        const Tick& t = ticks_[static_cast<std::size_t>(i) * static_cast<std::size_t>(per_user_) + static_cast<std::size_t>(r)];
+        users_[static_cast<std::size_t>(i)]->before_tick();
+        who[m] = i;
+        tick[m] = &t.frame;
+        gap[m++] = t.gap;
+      }
+      run(static_cast<const int*>(who), m, static_cast<const trackers::TrackerFrame* const*>(tick), static_cast<const bool*>(gap));
+      steps += m;
+    }
+    return steps;
+  }
+
  private:
   std::vector<std::unique_ptr<Pipeline>> users_;
   std::unique_ptr<IO[]> io_;
+  struct Tick {
+    trackers::TrackerFrame frame;
+    bool gap;
+  };
+  int per_user_ = 1;               // the stream's max_ticks_per_push()
+  std::unique_ptr<Tick[]> ticks_;  // n x per_user_
 };
 
 }  // namespace sparsebody::avatar

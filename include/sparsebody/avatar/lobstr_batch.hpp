@@ -5,15 +5,17 @@
 //
 //   auto w = avatar::LoBSTrCompact::load("lobstr_compact.weights.json");
 //   avatar::LoBSTrBatch<avatar::LoBSTrCompact> crowd(w, 16);   // 16 users, allocated once
-//   crowd.step(frames);                    // frames[i]: user i's tracker frame at the model rate
-//   crowd[3].world();                      // user 3's pose, as LoBSTrPipeline::step would give it
+//   crowd.push(frames);                    // frames[i]: user i's device frame at any rate
+//   crowd[3].world();                      // user 3's pose, as LoBSTrPipeline::push would give it
 //
 // Every user's results equal a LoBSTrPipeline of its own stepped with the same frames, bit for
 // bit (tests/pipeline/test_batch.cpp), float, f16 and int8 storage (int8 shares weight loads with
-// the VNNI kernels only: nn/int8.hpp gemv_batch_q8). Model-rate frames: the caller resamples, as for LoBSTrPipeline::step
-// (frame times still matter: the sanitiser sees them). Streaming mode only (Window mode replays
-// a second of frames per step and gains nothing from sharing). step() never allocates, throws
-// or locks.
+// the VNNI kernels only: nn/int8.hpp gemv_batch_q8). push() takes device frames as
+// LoBSTrPipeline::push does (each user's own resampling, recentre and controller-swap checks);
+// step() takes model-rate frames as LoBSTrPipeline::step does (the caller resamples; frame times
+// still matter: the sanitiser sees them). Streaming mode only (Window mode replays
+// a second of frames per step and gains nothing from sharing). push() and step() never
+// allocate, throw or lock.
 #pragma once
 #include <memory>
 #include <stdexcept>
@@ -43,15 +45,36 @@ class LoBSTrBatch {
 
   // One model frame of every user: frames[i] is user i's; restart (optional) as step()'s.
   void step(const trackers::TrackerFrame* frames, const bool* restart = nullptr) noexcept {
+    int who[nn::kBatchMax];
+    const trackers::TrackerFrame* f[nn::kBatchMax];
+    bool r[nn::kBatchMax];
+    for (int i = 0; i < size(); ++i) who[i] = i, f[i] = frames + i, r[i] = restart != nullptr && restart[i];
+    step_users(who, size(), f, r);
+  }
+
+  // One input frame of every user at any rate (frames[i] is user i's), as LoBSTrPipeline::push:
+  // each user's own stream resamples it, finds recentres and controllers in the other hands, and
+  // the model ticks it completes are stepped, the users' networks together. Returns the number of
+  // user steps run.
+  int push(const trackers::TrackerFrame* frames) noexcept {
+    return users_.push(frames, [this](const int* who, int m, const trackers::TrackerFrame* const* ticks, const bool* gaps) {
+      step_users(who, m, ticks, gaps);
+    });
+  }
+
+ private:
+  // Users who[0..m) step on frames f[k] (restart r[k]), their networks in one call.
+  void step_users(const int* who_in, int n, const trackers::TrackerFrame* const* f, const bool* r) noexcept {
     nn::Network<Net>* nets[nn::kBatchMax];
     const T* x[nn::kBatchMax];
     T* in[nn::kBatchMax];
     T* y[nn::kBatchMax];
     int who[nn::kBatchMax];
     int m = 0;
-    for (int i = 0; i < size(); ++i) {
+    for (int k = 0; k < n; ++k) {
+      const int i = who_in[k];
       Pipeline& p = users_[i];
-      x[m] = p.begin_step(frames[i], restart != nullptr && restart[i]);
+      x[m] = p.begin_step(*f[k], r[k]);
       if (!x[m]) continue;  // not usable: that user's frame is done
       nets[m] = &p.network();
       in[m] = users_.io(i).input.data();
@@ -62,7 +85,6 @@ class LoBSTrBatch {
     for (int k = 0; k < m; ++k) users_[who[k]].end_step(y[k]);
   }
 
- private:
   struct IO {
     nn::PaddedVector<T, Net::in_size> input;
     nn::PaddedVector<T, Net::out_size> output;

@@ -5,12 +5,14 @@
 //
 //   auto w = avatar::N3PDirect::load("examples/weights/n3p");
 //   avatar::N3PBatch<avatar::N3PDirect> crowd(w, 16);
-//   crowd.step(frames);                    // frames[i]: user i's tracker frame at the model rate
-//   crowd[3].world();                      // user 3's pose, as N3PPipeline::step would give it
+//   crowd.push(frames);                    // frames[i]: user i's device frame at any rate
+//   crowd[3].world();                      // user 3's pose, as N3PPipeline::push would give it
 //
 // Every user's results equal an N3PPipeline of its own stepped with the same frames, bit for bit
-// (tests/n3p/test_batch.cpp), float, f16 and int8 storage. Model-rate frames (the caller
-// resamples, as for N3PPipeline::step). step() never allocates, throws or locks.
+// (tests/n3p/test_batch.cpp), float, f16 and int8 storage. push() takes device frames as
+// N3PPipeline::push does (each user's own resampling, recentre and controller-swap checks), step()
+// model-rate frames as N3PPipeline::step does (the caller resamples). Neither allocates, throws or
+// locks.
 #pragma once
 #include <memory>
 #include <stdexcept>
@@ -45,9 +47,29 @@ class N3PBatch {
   // One model frame of every user: frames[i] is user i's; restart (optional) as step()'s.
   void step(const trackers::TrackerFrame* frames, const bool* restart = nullptr) noexcept {
     int who[nn::kBatchMax];
+    const trackers::TrackerFrame* f[nn::kBatchMax];
+    bool r[nn::kBatchMax];
+    for (int i = 0; i < size(); ++i) who[i] = i, f[i] = frames + i, r[i] = restart != nullptr && restart[i];
+    step_users(who, size(), f, r);
+  }
+
+  // One input frame of every user at any rate (frames[i] is user i's), as N3PPipeline::push: each
+  // user's own stream resamples it, finds recentres and controllers in the other hands, and the
+  // model ticks it completes are stepped, the users' networks together. Returns the number of user
+  // steps run.
+  int push(const trackers::TrackerFrame* frames) noexcept {
+    return users_.push(frames, [this](const int* who, int m, const trackers::TrackerFrame* const* ticks, const bool* gaps) {
+      step_users(who, m, ticks, gaps);
+    });
+  }
+
+ private:
+  // Users who[0..m) step on frames f[k] (restart r[k]); G_sig, G_lo and G_up each run once for all.
+  void step_users(const int* users, int n, const trackers::TrackerFrame* const* f, const bool* r) noexcept {
+    int who[nn::kBatchMax];
     int m = 0;
-    for (int i = 0; i < size(); ++i)
-      if (users_[i].begin_step(frames[i], restart != nullptr && restart[i])) who[m++] = i;
+    for (int k = 0; k < n; ++k)
+      if (users_[users[k]].begin_step(*f[k], r[k])) who[m++] = users[k];
     if (m == 0) return;
     nn::Network<SigNet>* sig[nn::kBatchMax];
     nn::Network<LoNet>* lo[nn::kBatchMax];
@@ -77,7 +99,6 @@ class N3PBatch {
     }
   }
 
- private:
   struct IO {  // per user: each network's normalised input and output (padded)
     nn::PaddedVector<T, SigNet::in_size> sig_in;
     nn::PaddedVector<T, SigNet::out_size> sig_out;

@@ -43,6 +43,17 @@ class PipelineFrontEnd {
     });
   }
 
+  // push(f) in two halves, for a batch of users whose ticks step together (avatar/batch_users.hpp):
+  // push_ticks(f, keep) feeds f through the stream and hands each tick it completes to
+  // keep(tick, gap) instead of stepping it (at most tracker_stream().max_ticks_per_push()); the
+  // batch then steps those ticks in order, calling before_tick() before each, as push(f) would.
+  template <class Keep>
+  int push_ticks(const trackers::TrackerFrame& f, Keep&& keep) noexcept {
+    stream_.set_head_offset(self().head_offset());
+    return stream_.push(f, std::forward<Keep>(keep));
+  }
+  void before_tick() noexcept { follow_controller_roles(); }
+
   // The pose on the pipeline's skeleton; valid when has_output().
   const pose::BodyPose& pose() const noexcept { return out_.pose(); }
   const pose::WorldPose& world() const noexcept { return out_.world(); }

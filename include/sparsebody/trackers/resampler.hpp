@@ -13,6 +13,8 @@ class Resampler {
   explicit Resampler(double fps = 30.0, double max_gap = 0.25) : period_(1.0 / fps), max_gap_(max_gap) {}
 
   double period() const noexcept { return period_; }
+  // The most ticks one push() can emit: those in one gap of at most max_gap, or 1 on a restart.
+  int max_ticks_per_push() const noexcept { return static_cast<int>(max_gap_ / period_ + 1e-6) + 1; }
   void reset() noexcept { started_ = false; }
   // The next frame restarts the tick clock and is flagged as a reset, as after a time gap (the
   // frames before it are in another world: trackers/recenter.hpp).

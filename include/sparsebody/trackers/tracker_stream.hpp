@@ -57,6 +57,7 @@ class TrackerStream {
   }
 
   double period() const noexcept { return resampler_.period(); }
+  int max_ticks_per_push() const noexcept { return resampler_.max_ticks_per_push(); }
   const SanitizedFrame& last_sanitized() const noexcept { return sanitizer_.last(); }
 
  private:
