@@ -18,6 +18,10 @@ against the clip that drove it, the same way for every input path:
   swapped  devices with the controllers in the other hands (symmetric controllers whose roles the
            runtime gave the wrong way round), through the CSV path: the session written as the
            demo's tracker CSV with its left / right hand columns exchanged, read back
+  noisy    devices with tracking noise, through the CSV path: white noise on every sample of the
+           72 Hz stream, positions sigma 0.3 mm (headset) / 1 mm (controllers, belt), orientations
+           0.2 deg per axis (add_tracking_noise; sub-millimetre static jitter is what headsets and
+           controllers show, and a network fed velocities sees it amplified by the frame rate)
   cmu      the CMU clips of Debian's assimp-testmodels (another performer, another skeleton)
 
 Metrics (12 joints mapped by role: hips, head, hands, thighs, knees, ankles, toes; metres -> cm):
@@ -29,6 +33,8 @@ Metrics (12 joints mapped by role: hips, head, hands, thighs, knees, ankles, toe
                and both toes slower than 5 cm/s for >= 0.5 s) (cm/s)
   head         mean distance of the output's head joint from the clip's (the head joint sits where the
                eye-point offset puts it relative to the headset) (cm)
+  jitter       mean jerk of the output's hips and leg joints, |third difference| x fps^3 (km/s^3, as
+               the demo's "jitter (lower body)"; the clips' own is ~0.1-0.3)
 
   /usr/bin/python3 -m weights_tool.offdist [DEMO] VALIDATION_DIR --modes nominal devices s155 ... \\
         [--models lobstr n3p] [--every 5] [--json out.json] [--runner auto|module|demo] [--plots DIR]
@@ -143,6 +149,9 @@ def compare_positions(P_out, truth_bvh, truth_units=None, hold=None):
     st = still_mask(truth, Pt, fps)
     v = hspeed(Po[:, ti[0]], fps) + hspeed(Po[:, ti[1]], fps)
     m["still_feet"] = (v[st].sum() / 2, int(st.sum()))
+    if len(Po) > 3:
+        jerk = np.linalg.norm(np.diff(Po[:, li], n=3, axis=0), axis=-1) * fps ** 3 / 1000.0
+        m["jitter"] = (jerk.sum(), jerk.size)
     m["frames"] = (n, 1)
     return m
 
@@ -167,7 +176,38 @@ def run_demo(demo, src, out, model, extra, trackers_out=None):
 
 
 DEVICES = ["--devices", "--devices-stand", "0"]  # a session that starts with the user standing 2.5 s
-CSV_MODES = ("csv", "csvstop", "swapped")
+CSV_MODES = ("csv", "csvstop", "swapped", "noisy")
+NOISE_POSITION = (0.0003, 0.001, 0.001, 0.001)  # m, sigma per axis: headset, left, right, belt
+NOISE_ORIENTATION = np.radians(0.2)              # rad, sigma per axis
+
+
+def add_tracking_noise(path, seed):
+    """Adds white tracking noise (NOISE_POSITION, NOISE_ORIENTATION) to every sample of a tracker CSV:
+    each position moved by a Gaussian offset, each orientation turned by a small Gaussian rotation."""
+    with open(path) as f:
+        lines = f.readlines()
+    h = next(k for k, l in enumerate(lines) if not l.startswith("#"))
+    cols = lines[h].strip().split(",")
+    rows = np.array([[float(x) for x in l.strip().split(",")] for l in lines[h + 1:] if l.strip()])
+    rng = np.random.default_rng(seed)
+    for k, name in enumerate(("head", "left_hand", "right_hand", "pelvis")):
+        if name + "_px" not in cols:
+            continue
+        p = [cols.index(f"{name}_p{a}") for a in "xyz"]
+        q = [cols.index(f"{name}_q{a}") for a in "xyzw"]
+        rows[:, p] += rng.normal(0.0, NOISE_POSITION[k], (len(rows), 3))
+        w = rng.normal(0.0, NOISE_ORIENTATION, (len(rows), 3))  # small rotation vectors, world frame
+        a = np.linalg.norm(w, axis=1, keepdims=True)
+        d = np.concatenate([np.where(a > 0, w / np.maximum(a, 1e-12), 0) * np.sin(a / 2), np.cos(a / 2)], axis=1)
+        x1, y1, z1, w1 = d.T
+        x2, y2, z2, w2 = rows[:, q].T
+        rows[:, q] = np.stack([w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2, w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+                               w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2, w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2], axis=1)
+    valid = [i for i, c in enumerate(cols) if c.endswith("_valid")]
+    with open(path, "w") as f:
+        f.writelines(lines[:h + 1])
+        for r in rows:
+            f.write(",".join(str(int(v)) if i in valid else f"{v:.9g}" for i, v in enumerate(r)) + "\n")
 
 
 def swap_hand_columns(path):
@@ -189,7 +229,7 @@ def mode_inputs(mode, val_dir, every, tmp):
         return files, DEVICES, files
     if mode in ("csv", "csvstop"):  # the user walks from the first frame and stands half-way through the clip
         return files, ["--devices"], files
-    if mode == "swapped":
+    if mode in ("swapped", "noisy"):
         return files, DEVICES, files
     if mode == "cmu":
         return [f for f in CMU if os.path.exists(f)], [], [f for f in CMU if os.path.exists(f)]
@@ -249,6 +289,8 @@ def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None, sb=No
                               trackers_out=csv)
                 if mode == "swapped":
                     swap_hand_columns(csv)
+                if mode == "noisy":
+                    add_tracking_noise(csv, 1000 + ci)
                 rc, res = module_run(sb, csv, model, extra)
             else:
                 rc, res = module_run(sb, s, model, opts_c + extra)
@@ -264,6 +306,8 @@ def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None, sb=No
                     continue
                 if mode == "swapped":
                     swap_hand_columns(csv)
+                if mode == "noisy":
+                    add_tracking_noise(csv, 1000 + ci)
                 rc, log = run_demo(demo, csv, out, model, extra)
             else:
                 rc, log = run_demo(demo, s, out, model, opts_c + extra)
@@ -323,7 +367,7 @@ def main(argv=None):
     os.makedirs(tmp, exist_ok=True)
     results, clips = [], []
     print(f"{'model':7s} {'mode':10s} {'clips':>5s} {'MPJPE':>7s} {'lower':>7s} {'toe':>7s} {'head':>7s} "
-          f"{'skate':>7s} {'still':>7s}   (cm, cm/s)")
+          f"{'skate':>7s} {'still':>7s} {'jitter':>7s}   (cm, cm/s, km/s^3)")
     for model in a.models:
         for mode in a.modes:
             r, fails = evaluate(a.demo, a.val_dir, mode, model, a.every, extra, tmp, clips, sb=sb)
@@ -331,7 +375,7 @@ def main(argv=None):
             results.append(r)
             c = lambda k: 100 * r.get(k, float("nan"))
             print(f"{model:7s} {mode:10s} {r['clips']:5d} {c('mpjpe'):7.2f} {c('lower'):7.2f} {c('toe'):7.2f} "
-                  f"{c('head'):7.2f} {c('skate'):7.2f} {c('still_feet'):7.2f}" +
+                  f"{c('head'):7.2f} {c('skate'):7.2f} {c('still_feet'):7.2f} {r.get('jitter', float('nan')):7.2f}" +
                   (f"   {len(fails)} failed: {fails[0]}" if fails else ""), flush=True)
     if a.plots and sb is not None:
         from . import plots
