@@ -10,6 +10,7 @@
 //     every frame: p.Push(ref frame); if (p.Read(rot, pos, out var info)) { ... }
 //   }
 //
+// Many avatars on one weight set: new Sparsebody.Crowd(w, kind, n); crowd.Push(frames); crowd.Users[i].Read(...).
 // Errors: a failing call throws SparsebodyException (its Status and the library's one-line message).
 // Per frame (Push, Read) nothing is allocated on the managed side either: the arrays are pinned, not
 // copied. Threads: as the header says, a Weights may be shared by pipelines on any threads; a
@@ -112,6 +113,7 @@ public static class Native {
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern IntPtr sb_last_error(IntPtr handle);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern IntPtr sb_last_error(WeightsHandle handle);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern IntPtr sb_last_error(PipelineHandle handle);
+  [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern IntPtr sb_last_error(CrowdHandle handle);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)]
   public static extern Status sb_weights_load(Model model, [MarshalAs(UnmanagedType.LPStr)] string path, out WeightsHandle w);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)]
@@ -137,6 +139,12 @@ public static class Native {
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_pipeline_calibrate_frame(PipelineHandle p, ref TrackerFrame f);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_pipeline_set_joint_calibration(PipelineHandle p, double scale);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_pipeline_calibration(PipelineHandle p, ref CalibrationReport r);
+  [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)]
+  public static extern Status sb_crowd_create(WeightsHandle w, ref PipelineConfig cfg, int users, out CrowdHandle c);
+  [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_crowd_destroy(IntPtr c);
+  [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)]
+  public static extern Status sb_crowd_push(CrowdHandle c, [In] TrackerFrame[] frames, int count, [Out] int[] steps);
+  [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_crowd_user(CrowdHandle c, int i, out IntPtr user);
 }
 
 public sealed class WeightsHandle : SafeHandle {
@@ -147,8 +155,16 @@ public sealed class WeightsHandle : SafeHandle {
 
 public sealed class PipelineHandle : SafeHandle {
   PipelineHandle() : base(IntPtr.Zero, true) {}
+  // A crowd's user: the crowd frees it (ownsHandle false).
+  internal PipelineHandle(IntPtr user) : base(IntPtr.Zero, false) { SetHandle(user); }
   public override bool IsInvalid { get { return handle == IntPtr.Zero; } }
   protected override bool ReleaseHandle() { return Native.sb_pipeline_destroy(handle) == Status.Ok; }
+}
+
+public sealed class CrowdHandle : SafeHandle {
+  CrowdHandle() : base(IntPtr.Zero, true) {}
+  public override bool IsInvalid { get { return handle == IntPtr.Zero; } }
+  protected override bool ReleaseHandle() { return Native.sb_crowd_destroy(handle) == Status.Ok; }
 }
 
 // A weight set, loaded once; any number of pipelines (on any threads) share it, and keep it alive.
@@ -193,9 +209,15 @@ public sealed class Pipeline : IDisposable {
     Check(Native.sb_pipeline_joint_count(Handle, out n), Handle);
     JointCount = n;
   }
+  internal Pipeline(PipelineHandle user) {  // a crowd's user
+    Handle = user;
+    int n;
+    Check(Native.sb_pipeline_joint_count(Handle, out n), Handle);
+    JointCount = n;
+  }
   public void Dispose() { Handle.Dispose(); }
 
-  static void Check(Status s, PipelineHandle h) {
+  internal static void Check(Status s, PipelineHandle h) {
     if (s >= 0) return;
     IntPtr m = h != null ? Native.sb_last_error(h) : Native.sb_last_error(IntPtr.Zero);
     throw new SparsebodyException(s, Marshal.PtrToStringAnsi(m));
@@ -245,6 +267,39 @@ public sealed class Pipeline : IDisposable {
     }
   }
   public string LastError { get { return Marshal.PtrToStringAnsi(Native.sb_last_error(Handle)); } }
+}
+
+// Many avatars on one weight set (LoBSTr or N3PDirect, 1-64 users), stepped together: each model tick
+// runs every user's network in one call (a social scene). Push takes one frame per user; Users[i]
+// reads user i (Read, Calibration, Reset, ...) and is valid until the crowd is disposed. Each user
+// gets exactly what a Pipeline of its own would give for the same frames.
+public sealed class Crowd : IDisposable {
+  public readonly CrowdHandle Handle;
+  public readonly Pipeline[] Users;
+
+  public Crowd(Weights w, PipelineKind kind, int users) : this(w, Pipeline.DefaultConfig(kind), users) {}
+  public Crowd(Weights w, PipelineConfig cfg, int users) {
+    CrowdHandle h;
+    Status s = Native.sb_crowd_create(w.Handle, ref cfg, users, out h);
+    if (s < 0) throw new SparsebodyException(s, Marshal.PtrToStringAnsi(Native.sb_last_error(IntPtr.Zero)));
+    Handle = h;
+    Users = new Pipeline[users];
+    for (int i = 0; i < users; ++i) {
+      IntPtr u;
+      Check(Native.sb_crowd_user(Handle, i, out u));
+      Users[i] = new Pipeline(new PipelineHandle(u));
+    }
+  }
+  // frames[i]: user i's frame (frames.Length == Users.Length; a user with no new frame gets its last
+  // one again). steps (may be null, else Users.Length long): the model steps each user ran.
+  public void Push(TrackerFrame[] frames, int[] steps = null) {
+    Check(Native.sb_crowd_push(Handle, frames, frames != null ? frames.Length : 0, steps));
+  }
+  public void Dispose() { Handle.Dispose(); }
+
+  void Check(Status s) {
+    if (s < 0) throw new SparsebodyException(s, Marshal.PtrToStringAnsi(Native.sb_last_error(Handle)));
+  }
 }
 
 }  // namespace Sparsebody

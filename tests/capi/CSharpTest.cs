@@ -2,6 +2,8 @@
 // shared library and compares every frame's joint world positions with what the C++ pipelines gave
 // for the same CSV (capi_reference: OUT_DIR/{lobstr,n3p_direct,n3p_physics}.ref). Also the binding's
 // error paths: a missing file, a LoBSTr file as QuestSim, a wrong struct size, use after Dispose.
+// Crowds (Sparsebody.Crowd): three users on the same session, shifted in frames and time, each equal
+// to the C++ reference for its frames.
 //   mono CSharpTest.exe SESSION.csv WEIGHTS_DIR REF_DIR     exit 0: all equal within kTolerance
 using System;
 using System.Collections.Generic;
@@ -94,6 +96,48 @@ static class CSharpTest {
     }
   }
 
+  // A crowd of 3 users on the session (user 1 one frame behind the others, user 2 on a clock 10 s
+  // later): every user's positions equal the C++ reference for its own frame (as Compare's).
+  static void CompareCrowd(string name, Weights w, PipelineKind kind, List<TrackerFrame> frames, string refPath) {
+    var reference = ReadRef(refPath);
+    using (var c = new Crowd(w, kind, 3)) {
+      int n = c.Users[0].JointCount;
+      var pos = new Vec3f[n];
+      var input = new TrackerFrame[3];
+      var steps = new int[3];
+      int compared = 0;
+      double maxDiff = 0;
+      for (int i = 0; i <= frames.Count; ++i) {
+        input[0] = frames[Math.Min(i, frames.Count - 1)];  // the last frame again at the end: no tick
+        input[1] = frames[Math.Max(i - 1, 0)];
+        input[2] = frames[Math.Min(i, frames.Count - 1)];
+        input[2].time += 10.0;
+        c.Push(input, steps);
+        for (int u = 0; u < 3; ++u) {
+          int at = u == 1 ? Math.Max(i - 1, 0) : Math.Min(i, frames.Count - 1);
+          PoseInfo info;
+          if (!c.Users[u].Read(null, pos, out info)) { Expect(!reference.ContainsKey(at), name + ": user " + u + " frame " + at + ": no pose"); continue; }
+          double[] want;
+          if (!reference.TryGetValue(at, out want)) continue;  // a repeated frame shows the last pose
+          for (int j = 0; j < n; ++j) {
+            maxDiff = Math.Max(maxDiff, Math.Abs(pos[j].x - (float)want[3 * j]));
+            maxDiff = Math.Max(maxDiff, Math.Abs(pos[j].y - (float)want[3 * j + 1]));
+            maxDiff = Math.Max(maxDiff, Math.Abs(pos[j].z - (float)want[3 * j + 2]));
+          }
+          ++compared;
+        }
+      }
+      Console.WriteLine("C# crowd {0,-8} 3 users, {1} poses compared with C++, max |diff| {2:G3} m", name, compared, maxDiff);
+      Expect(compared > 2 * reference.Count, name + " crowd: compared " + compared);
+      Expect(maxDiff <= kTolerance, name + " crowd: max |diff| " + maxDiff + " m");
+      Expect(steps[0] == 0, name + " crowd: a repeated frame ran " + steps[0] + " steps");
+      try { c.Push(new TrackerFrame[2]); Expect(false, "2 frames for 3 users"); }
+      catch (SparsebodyException e) { Expect(e.Status == Status.ErrInvalidArgument && e.Message.Contains("2 frames for a crowd of 3"), "crowd count: " + e.Message); }
+    }
+    try { new Crowd(w, PipelineKind.N3PPhysics, 2); Expect(false, "a physics crowd"); }
+    catch (SparsebodyException e) { Expect(e.Status == Status.ErrInvalidArgument || e.Status == Status.ErrMismatch, "physics crowd: " + e.Message); }
+  }
+
   static void ErrorPaths(string weightsDir) {
     try { Weights.Load(Model.LoBSTr, "/nonexistent.json"); Expect(false, "missing file loaded"); }
     catch (SparsebodyException e) { Expect(e.Status == Status.ErrLoad && e.Message.Contains("/nonexistent.json"), "missing file: " + e.Message); }
@@ -126,10 +170,13 @@ static class CSharpTest {
     if (args.Length != 3) { Console.Error.WriteLine("usage: CSharpTest.exe SESSION.csv WEIGHTS_DIR REF_DIR"); return 2; }
     Expect(Native.sb_api_version() == Native.ApiVersion, "API version");
     var frames = ReadCsv(args[0]);
-    using (var lobstr = Weights.Load(Model.LoBSTr, args[1] + "/lobstr_compact.weights.json"))
+    using (var lobstr = Weights.Load(Model.LoBSTr, args[1] + "/lobstr_compact.weights.json")) {
       Compare("lobstr", lobstr, PipelineKind.LoBSTr, frames, args[2] + "/lobstr.ref");
+      CompareCrowd("lobstr", lobstr, PipelineKind.LoBSTr, frames, args[2] + "/lobstr.ref");
+    }
     using (var n3p = Weights.Load(Model.N3P, args[1] + "/n3p")) {
       Compare("n3p_direct", n3p, PipelineKind.N3PDirect, frames, args[2] + "/n3p_direct.ref");
+      CompareCrowd("n3p", n3p, PipelineKind.N3PDirect, frames, args[2] + "/n3p_direct.ref");
       Compare("n3p_physics", n3p, PipelineKind.N3PPhysics, frames, args[2] + "/n3p_physics.ref");
     }
     ErrorPaths(args[1]);

@@ -3,7 +3,9 @@
 // then a sequence of calls - push (hostile poses, validity bits, time going backwards, NaN), read
 // (NULL arrays, short capacities, wrong struct sizes), calibrate on a frame, set a joint
 // calibration (NaN, 0, huge), recalibrate, reset, the skeleton queries with out-of-range indices,
-// and calls on NULL or destroyed handles. Checked: no crash or sanitizer report; every status is a
+// and calls on NULL or destroyed handles. Or (bit 7 of the config byte) a crowd of 0-5 users
+// (sb_crowd_*): pushes of every user's frame at once (sometimes the wrong count), the other calls on
+// a user's handle, and an attempt to destroy a user's handle. Checked: no crash or sanitizer report; every status is a
 // known one with a message when it is an error; a read that says SB_OK copies finite numbers.
 #include <cmath>
 #include <cstdint>
@@ -103,12 +105,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const sb_weights* other = kind == 1 ? W.n3p : W.lobstr;
   const sb_weights* w = (c & 64) ? other : own;
   sb_pipeline* p = nullptr;
-  const sb_status created = sb_pipeline_create(w, &cfg, &p);
+  sb_crowd* crowd = nullptr;
+  int32_t users = 0;
+  const sb_status created = (c & 128) ? sb_crowd_create(w, &cfg, users = b.u8() % 6, &crowd) : sb_pipeline_create(w, &cfg, &p);
   check(created, nullptr, "create");
   if (created != SB_OK) {
-    if (p) fail("a failed create returned a handle", created);
+    if (p || crowd) fail("a failed create returned a handle", created);
     return 0;
   }
+  if (crowd) check(sb_crowd_user(crowd, 0, &p), crowd, "crowd_user");
   static sb_quatf rot[256];
   static sb_vec3f pos[256];
   int32_t joints = 0;
@@ -117,7 +122,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (int k = 0; b.more() && k < 120; ++k) {
     const std::uint8_t op = b.u8();
     sb_status s = SB_OK;
-    if (op < 160) {
+    if (crowd && (op & 16)) {  // the next calls on another user
+      check(sb_crowd_user(crowd, static_cast<int32_t>(b.u8() % 8) - 1, &p), crowd, "crowd_user");
+      if (!p) check(sb_crowd_user(crowd, 0, &p), crowd, "crowd_user");
+    }
+    if (op < 160 && crowd && (op & 2)) {
+      static sb_tracker_frame f[8];
+      static int32_t steps[8];
+      for (int u = 0; u < users; ++u) f[u] = frame(b, t, k);
+      const int32_t count = (op & 4) ? users + 1 : users;
+      check(sb_crowd_push(crowd, f, count, (op & 1) ? nullptr : steps), crowd, "crowd_push");
+    } else if (op < 160) {
       const sb_tracker_frame f = frame(b, t, k);
       int32_t steps = -1;
       s = sb_pipeline_push(p, &f, (op & 1) ? nullptr : &steps);
@@ -171,6 +186,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       check(sb_pipeline_push(nullptr, nullptr, nullptr), nullptr, "push on NULL");
     }
   }
-  check(sb_pipeline_destroy(p), nullptr, "destroy");
+  if (crowd) {
+    if (sb_pipeline_destroy(p) != SB_ERR_INVALID_ARGUMENT) fail("a crowd's user destroyed alone", SB_OK);
+    check(sb_crowd_destroy(crowd), nullptr, "crowd_destroy");
+  } else {
+    check(sb_pipeline_destroy(p), nullptr, "destroy");
+  }
   return 0;
 }

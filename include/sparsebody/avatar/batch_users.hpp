@@ -36,10 +36,11 @@ class BatchUsers {
   // frames[i]: user i's input frame at any rate, as Pipeline::push takes it (resampling, recentre
   // and controller-swap checks in each user's own stream). Each user's frame completes 0..k model
   // ticks; round r steps, in one call run(who, m, ticks, gaps), the m users with more than r ticks:
-  // ticks[k] and gaps[k] are user who[k]'s (r+1)-th tick and its restart flag. Every user sees what
-  // push(frames[i]) would do to it. Returns the number of user steps run.
-  template <class Run>
-  int push(const trackers::TrackerFrame* frames, Run&& run) noexcept {
+  // ticks[k] and gaps[k] are user who[k]'s (r+1)-th tick and its restart flag; then
+  // after(who[k], ticks[k], gaps[k]) for each (what Pipeline::push(f, after) calls after a step).
+  // Every user sees what push(frames[i]) would do to it. Returns the number of user steps run.
+  template <class Run, class After>
+  int push(const trackers::TrackerFrame* frames, Run&& run, After&& after) noexcept {
     int count[nn::kBatchMax];
     int most = 0, steps = 0;
     for (int i = 0; i < size(); ++i) {
@@ -65,6 +66,7 @@ class BatchUsers {
         gap[m++] = t.gap;
       }
       run(static_cast<const int*>(who), m, static_cast<const trackers::TrackerFrame* const*>(tick), static_cast<const bool*>(gap));
+      for (int k = 0; k < m; ++k) after(who[k], *tick[k], gap[k]);
       steps += m;
     }
     return steps;

@@ -57,9 +57,15 @@ class LoBSTrBatch {
   // the model ticks it completes are stepped, the users' networks together. Returns the number of
   // user steps run.
   int push(const trackers::TrackerFrame* frames) noexcept {
-    return users_.push(frames, [this](const int* who, int m, const trackers::TrackerFrame* const* ticks, const bool* gaps) {
-      step_users(who, m, ticks, gaps);
-    });
+    return push(frames, [](int, const trackers::TrackerFrame&, bool) {});
+  }
+  // The same, calling after(user, tick, gap) after each user's step (as LoBSTrPipeline::push(f, after)).
+  template <class After>
+  int push(const trackers::TrackerFrame* frames, After&& after) noexcept {
+    return users_.push(
+        frames,
+        [this](const int* who, int m, const trackers::TrackerFrame* const* ticks, const bool* gaps) { step_users(who, m, ticks, gaps); },
+        after);
   }
 
  private:

@@ -10,6 +10,8 @@
  *   sb_pipeline* p;  sb_pipeline_create(w, &c, &p);                                 one per avatar
  *   per frame:  sb_pipeline_push(p, &frame, NULL);  sb_pipeline_read(p, &info, rot, pos, n);
  *   sb_pipeline_destroy(p);  sb_weights_destroy(w);      (either order: a pipeline keeps its weights)
+ * Many avatars on one weight set: sb_crowd_create / sb_crowd_push (all users' frames in one call) /
+ * sb_crowd_user (each user's sb_pipeline handle, for reading).
  *
  * Errors: every call returns an sb_status: 0 OK, > 0 success with a note, < 0 an error that changed
  * nothing. sb_last_error(handle) is the one-line message of the last failed (or noted) call on that
@@ -159,7 +161,7 @@ typedef struct sb_pipeline sb_pipeline;
 
 SPARSEBODY_API uint32_t sb_api_version(void);
 SPARSEBODY_API const char* sb_status_name(sb_status s); /* "SB_OK", ...; "unknown" otherwise */
-/* One-line message of the last failed or noted call on `handle` (an sb_weights* or sb_pipeline*);
+/* One-line message of the last failed or noted call on `handle` (an sb_weights*, sb_pipeline* or sb_crowd*);
  * NULL or anything that is not a live handle: the last one on this thread. Never NULL. */
 SPARSEBODY_API const char* sb_last_error(const void* handle);
 
@@ -218,6 +220,28 @@ SPARSEBODY_API sb_status sb_pipeline_calibration(sb_pipeline* p, sb_calibration_
  * SB_ERR_NULL when any pointer is NULL. */
 SPARSEBODY_API sb_status sb_pipeline_stream_events(sb_pipeline* p, int32_t* recentres, int32_t* controller_swaps,
                                                    int32_t* controllers_swapped);
+
+/* --- crowds: many avatars stepped together ------------------------------------------------------ */
+/* A crowd is `users` (1-64) avatars of SB_PIPELINE_LOBSTR or SB_PIPELINE_N3P_DIRECT on one weight set
+ * (a social scene). Each user has its own tracker stream, calibration and state; at each model tick the
+ * users' networks run in one call, so each weight matrix is read once for all of them. Every user gets
+ * exactly what a pipeline of its own (same weights, same cfg, same frames) would give.
+ * Threads: as an sb_pipeline (one thread at a time), its users' handles included. */
+typedef struct sb_crowd sb_crowd;
+SPARSEBODY_API sb_status sb_crowd_create(const sb_weights* w, const sb_pipeline_config* cfg, int32_t users, sb_crowd** out);
+/* NULL is a no-op (SB_OK). Its users' handles die with it. */
+SPARSEBODY_API sb_status sb_crowd_destroy(sb_crowd* c);
+SPARSEBODY_API sb_status sb_crowd_size(sb_crowd* c, int32_t* users);
+/* One frame per user: frames[i] is user i's; count must be the crowd's size. A user with no new frame
+ * this time gets its last one again (the same time completes no tick and changes nothing).
+ * steps (may be NULL): count entries, the model steps each user ran. Every frame is checked first: one
+ * that sb_pipeline_push would refuse refuses the call (nothing pushed; the message names the user).
+ * SB_NONFINITE_POSE as sb_pipeline_push (the message names the first such user). */
+SPARSEBODY_API sb_status sb_crowd_push(sb_crowd* c, const sb_tracker_frame* frames, int32_t count, int32_t* steps);
+/* User i's pipeline handle, owned by the crowd and valid until sb_crowd_destroy. Every sb_pipeline_*
+ * call works on it (read, calibration, reset, stream events, skeleton); sb_pipeline_push steps that
+ * user alone, as the crowd would; sb_pipeline_destroy refuses it (SB_ERR_INVALID_ARGUMENT). */
+SPARSEBODY_API sb_status sb_crowd_user(sb_crowd* c, int32_t i, sb_pipeline** user);
 
 #ifdef __cplusplus
 }

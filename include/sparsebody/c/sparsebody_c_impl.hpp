@@ -6,6 +6,8 @@
 // from the pipeline, so a destroyed handle's memory stays small-bin heap: a stale pointer reads a
 // cleared tag (not an unmapped page). Every entry point catches everything: no exception crosses.
 // Per frame (push, read, queries): no allocation; messages go into fixed buffers (snprintf).
+// A crowd (sb_crowd) is one avatar::LoBSTrBatch / N3PBatch; its users' handles are sb_pipelines whose
+// impl views the batch's pipelines.
 // Builds: LoBSTr compact (H 256, latent 128), Neural3Points direct and physics (the paper's sizes),
 // QuestSim (avatar/questsim_session.hpp: the torque policy on a simulated avatar sized by the automatic
 // calibration), float weights.
@@ -24,7 +26,9 @@
 #include <system_error>
 #include <type_traits>
 
+#include "sparsebody/avatar/lobstr_batch.hpp"
 #include "sparsebody/avatar/lobstr_pipeline.hpp"
+#include "sparsebody/avatar/n3p_batch.hpp"
 #include "sparsebody/avatar/n3p_direct.hpp"
 #include "sparsebody/avatar/n3p_physics.hpp"
 #include "sparsebody/avatar/questsim_session.hpp"
@@ -36,6 +40,7 @@ namespace sparsebody::capi {
 
 inline constexpr std::uint64_t kWeightsTag = 0x5342574549474854ull;   // "SBWEIGHT"
 inline constexpr std::uint64_t kPipelineTag = 0x5342504950454c4eull;  // "SBPIPELN"
+inline constexpr std::uint64_t kCrowdTag = 0x534243524f574453ull;     // "SBCROWDS"
 inline constexpr std::uint64_t kDeadTag = 0x4445414444454144ull;      // written by destroy
 inline constexpr std::size_t kMessage = 256;
 
@@ -56,6 +61,8 @@ struct PipelineBase {
   virtual ~PipelineBase() = default;
   // One push; flags gets SB_POSE_RESET / SB_POSE_FALLEN, time the shown pose's input time.
   virtual int push(const trackers::TrackerFrame& f, std::uint32_t& flags) noexcept = 0;
+  // What push notes after each model step: the tick's time; true when the model restarted there.
+  virtual bool on_tick(const trackers::TrackerFrame& tick, bool gap) noexcept = 0;
   virtual bool has_output() const noexcept = 0;
   virtual const pose::BodyPose& pose() const noexcept = 0;
   virtual const pose::WorldPose& world() const noexcept = 0;
@@ -77,10 +84,12 @@ struct PipelineBase {
 
 template <class P>
 struct PipelineModel final : PipelineBase {
-  P p;
+  std::unique_ptr<P> own_;  // the pipeline (sb_pipeline_create), or none: a crowd's user (CrowdModel owns it)
+  P& p;
   double time_ = std::numeric_limits<double>::quiet_NaN();
   template <class W, class C>
-  PipelineModel(const W& w, const C& c) : p(w, c) {}
+  PipelineModel(const W& w, const C& c) : own_(std::make_unique<P>(w, c)), p(*own_) {}
+  explicit PipelineModel(P& user) : p(user) {}
 
   static constexpr bool kQuestSim = std::is_same_v<P, QuestSim>;
   static constexpr bool kPhysics = std::is_same_v<P, N3PPhysics> || kQuestSim;
@@ -94,10 +103,7 @@ struct PipelineModel final : PipelineBase {
     bool reset = false;
     long long falls = 0, restarts = 0;
     if constexpr (kPhysics) falls = p.falls(), restarts = p.restarts();
-    const int k = p.push(f, [&](const trackers::TrackerFrame& tick, bool gap) {
-      reset = reset || gap || sanitized().reset;
-      time_ = tick.time;
-    });
+    const int k = p.push(f, [&](const trackers::TrackerFrame& tick, bool gap) { reset = on_tick(tick, gap) || reset; });
     flags = 0;
     if constexpr (kPhysics) {
       if (p.restarts() != restarts) reset = true;
@@ -105,6 +111,10 @@ struct PipelineModel final : PipelineBase {
     }
     if (reset) flags |= SB_POSE_RESET;
     return k;
+  }
+  bool on_tick(const trackers::TrackerFrame& tick, bool gap) noexcept override {
+    time_ = tick.time;
+    return gap || sanitized().reset;
   }
   bool has_output() const noexcept override { return p.has_output(); }
   const pose::BodyPose& pose() const noexcept override { return p.pose(); }
@@ -145,6 +155,35 @@ struct PipelineModel final : PipelineBase {
   bool controllers_swapped() const noexcept override { return p.controllers_swapped(); }
 };
 
+// A crowd (sb_crowd): one batch of users (avatar/lobstr_batch.hpp, n3p_batch.hpp).
+struct CrowdBase {
+  virtual ~CrowdBase() = default;
+  virtual int size() const noexcept = 0;
+  // A PipelineModel view of user i (its sb_pipeline handle's impl).
+  virtual std::unique_ptr<PipelineBase> user_view(int i) = 0;
+  // One frame per user; users[i] (user i's view) notes each of its ticks; steps[i] and flags[i]
+  // (SB_POSE_RESET) get what its sb_pipeline_push would.
+  virtual void push(const trackers::TrackerFrame* frames, PipelineBase* const* users, int* steps, std::uint32_t* flags) noexcept = 0;
+};
+
+template <class P, class Batch>
+struct CrowdModel final : CrowdBase {
+  Batch batch;
+  template <class W, class C>
+  CrowdModel(const W& w, int n, const C& c) : batch(w, n, c) {}
+  int size() const noexcept override { return batch.size(); }
+  std::unique_ptr<PipelineBase> user_view(int i) override { return std::make_unique<PipelineModel<P>>(batch[i]); }
+  void push(const trackers::TrackerFrame* frames, PipelineBase* const* users, int* steps, std::uint32_t* flags) noexcept override {
+    bool reset[nn::kBatchMax] = {};
+    for (int i = 0; i < size(); ++i) steps[i] = 0;
+    batch.push(frames, [&](int i, const trackers::TrackerFrame& tick, bool gap) {
+      reset[i] = users[i]->on_tick(tick, gap) || reset[i];
+      ++steps[i];
+    });
+    for (int i = 0; i < size(); ++i) flags[i] = reset[i] ? SB_POSE_RESET : 0u;
+  }
+};
+
 }  // namespace sparsebody::capi
 
 struct sb_weights {
@@ -163,6 +202,17 @@ struct sb_pipeline {
   std::uint32_t flags = 0;
   std::int32_t steps = 0;
   std::unique_ptr<sparsebody::capi::PipelineBase> impl;
+  sb_crowd* crowd = nullptr;  // the crowd that owns this user's handle (sb_crowd_user), else NULL
+  char error[sparsebody::capi::kMessage] = "";
+};
+
+struct sb_crowd {
+  std::uint64_t tag = sparsebody::capi::kCrowdTag;
+  std::int32_t kind = 0;
+  int users = 0;
+  std::unique_ptr<sparsebody::capi::CrowdBase> impl;
+  std::unique_ptr<sb_pipeline[]> user;                     // the users' handles (impl: views of the batch's pipelines)
+  std::unique_ptr<sparsebody::capi::PipelineBase*[]> view;  // user[i].impl.get()
   char error[sparsebody::capi::kMessage] = "";
 };
 
@@ -213,6 +263,13 @@ inline bool finite_pose(const sb_posef& p) noexcept {
   return true;
 }
 
+// The first tracker flagged valid whose pose has NaN/Inf, or -1.
+inline int nonfinite_tracker(const sb_tracker_frame& f) noexcept {
+  for (int k = 0; k < SB_TRACKER_COUNT; ++k)
+    if (((f.valid >> k) & 1u) && !finite_pose(f.pose[k])) return k;
+  return -1;
+}
+
 // The C frame as the pipelines' TrackerFrame (same numbers: the pipeline sees what C++ callers pass).
 inline trackers::TrackerFrame to_frame(const sb_tracker_frame& f) noexcept {
   trackers::TrackerFrame t;
@@ -251,6 +308,41 @@ inline void load_n3p(sb_weights& w, const std::string& sig, const std::string& l
   (void)check;
 }
 
+// The checks of sb_pipeline_create and sb_crowd_create (fn: the caller's name for the message).
+inline sb_status check_create(const sb_weights* w, const sb_pipeline_config* cfg, const char* fn) noexcept {
+  if (!w || !cfg) return fail(nullptr, SB_ERR_NULL, "%s: %s is NULL", fn, w ? "cfg" : "weights");
+  if (!live(w, kWeightsTag)) return fail(nullptr, SB_ERR_BAD_HANDLE, "%s: not a live sb_weights (foreign or destroyed)", fn);
+  if (cfg->struct_size != sizeof(sb_pipeline_config))
+    return fail(nullptr, SB_ERR_STRUCT_SIZE, "%s: cfg struct_size %u, expected %u", fn, cfg->struct_size, unsigned(sizeof(sb_pipeline_config)));
+  if (cfg->version != SB_API_VERSION)
+    return fail(nullptr, SB_ERR_STRUCT_SIZE, "%s: cfg version %u, this library is %u", fn, cfg->version, SB_API_VERSION);
+  const int kind = cfg->pipeline;
+  if (kind < SB_PIPELINE_LOBSTR || kind > SB_PIPELINE_QUESTSIM) return fail(nullptr, SB_ERR_INVALID_ARGUMENT, "%s: unknown pipeline %d", fn, kind);
+  for (int32_t v : {cfg->auto_calibration, cfg->contact_ik, cfg->window_mode})
+    if (v != 0 && v != 1) return fail(nullptr, SB_ERR_INVALID_ARGUMENT, "%s: a flag of cfg is %d, not 0 or 1", fn, int(v));
+  if (cfg->window_mode && kind != SB_PIPELINE_LOBSTR) return fail(nullptr, SB_ERR_INVALID_ARGUMENT, "%s: window_mode is LoBSTr-only", fn);
+  const int need = kind == SB_PIPELINE_LOBSTR ? SB_MODEL_LOBSTR : kind == SB_PIPELINE_QUESTSIM ? SB_MODEL_QUESTSIM : SB_MODEL_N3P;
+  auto model_name = [](int m) { return m == SB_MODEL_LOBSTR ? "LoBSTr" : m == SB_MODEL_QUESTSIM ? "QuestSim" : "Neural3Points"; };
+  if (w->model != need)
+    return fail(nullptr, SB_ERR_MISMATCH, "%s: this pipeline needs %s weights, got %s", fn, model_name(need), model_name(w->model));
+  return SB_OK;
+}
+
+inline avatar::LoBSTrConfig lobstr_config(const sb_pipeline_config& cfg) noexcept {
+  avatar::LoBSTrConfig pc;
+  pc.mode = cfg.window_mode ? avatar::RunMode::Window : avatar::RunMode::Streaming;
+  pc.contact_ik = cfg.contact_ik != 0;
+  pc.calibration.enabled = cfg.auto_calibration != 0;
+  return pc;
+}
+
+inline avatar::N3PConfig n3p_config(const sb_pipeline_config& cfg) noexcept {
+  avatar::N3PConfig pc;
+  pc.foot_ik = cfg.contact_ik != 0;
+  pc.calibration.enabled = cfg.auto_calibration != 0;
+  return pc;
+}
+
 }  // namespace sparsebody::capi
 
 extern "C" {
@@ -282,6 +374,7 @@ SPARSEBODY_API const char* sb_last_error(const void* handle) {
   namespace c = sparsebody::capi;
   if (c::live(static_cast<const sb_pipeline*>(handle), c::kPipelineTag)) return static_cast<const sb_pipeline*>(handle)->error;
   if (c::live(static_cast<const sb_weights*>(handle), c::kWeightsTag)) return static_cast<const sb_weights*>(handle)->error;
+  if (c::live(static_cast<const sb_crowd*>(handle), c::kCrowdTag)) return static_cast<const sb_crowd*>(handle)->error;
   return c::thread_message();
 }
 
@@ -383,45 +476,21 @@ SPARSEBODY_API sb_status sb_pipeline_create(const sb_weights* w, const sb_pipeli
   namespace a = sparsebody::avatar;
   if (!out) return c::fail(nullptr, SB_ERR_NULL, "sb_pipeline_create: out is NULL");
   *out = nullptr;
-  if (!w || !cfg) return c::fail(nullptr, SB_ERR_NULL, "sb_pipeline_create: %s is NULL", w ? "cfg" : "weights");
-  if (!c::live(w, c::kWeightsTag)) return c::fail(nullptr, SB_ERR_BAD_HANDLE, "sb_pipeline_create: not a live sb_weights (foreign or destroyed)");
-  if (cfg->struct_size != sizeof(sb_pipeline_config))
-    return c::fail(nullptr, SB_ERR_STRUCT_SIZE, "sb_pipeline_create: cfg struct_size %u, expected %u", cfg->struct_size,
-                   unsigned(sizeof(sb_pipeline_config)));
-  if (cfg->version != SB_API_VERSION)
-    return c::fail(nullptr, SB_ERR_STRUCT_SIZE, "sb_pipeline_create: cfg version %u, this library is %u", cfg->version, SB_API_VERSION);
+  if (const sb_status s = c::check_create(w, cfg, "sb_pipeline_create"); s != SB_OK) return s;
   const int kind = cfg->pipeline;
-  if (kind < SB_PIPELINE_LOBSTR || kind > SB_PIPELINE_QUESTSIM)
-    return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_pipeline_create: unknown pipeline %d", kind);
-  for (int32_t v : {cfg->auto_calibration, cfg->contact_ik, cfg->window_mode})
-    if (v != 0 && v != 1) return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_pipeline_create: a flag of cfg is %d, not 0 or 1", int(v));
-  if (cfg->window_mode && kind != SB_PIPELINE_LOBSTR)
-    return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_pipeline_create: window_mode is LoBSTr-only");
-  const int need = kind == SB_PIPELINE_LOBSTR ? SB_MODEL_LOBSTR : kind == SB_PIPELINE_QUESTSIM ? SB_MODEL_QUESTSIM : SB_MODEL_N3P;
-  auto model_name = [](int m) { return m == SB_MODEL_LOBSTR ? "LoBSTr" : m == SB_MODEL_QUESTSIM ? "QuestSim" : "Neural3Points"; };
-  if (w->model != need)
-    return c::fail(nullptr, SB_ERR_MISMATCH, "sb_pipeline_create: this pipeline needs %s weights, got %s", model_name(need),
-                   model_name(w->model));
   try {
     auto h = std::make_unique<sb_pipeline>();
     h->kind = kind;
     if (kind == SB_PIPELINE_LOBSTR) {
-      a::LoBSTrConfig pc;
-      pc.mode = cfg->window_mode ? a::RunMode::Window : a::RunMode::Streaming;
-      pc.contact_ik = cfg->contact_ik != 0;
-      pc.calibration.enabled = cfg->auto_calibration != 0;
-      h->impl = std::make_unique<c::PipelineModel<c::LoBSTr>>(w->lobstr, pc);
+      h->impl = std::make_unique<c::PipelineModel<c::LoBSTr>>(w->lobstr, c::lobstr_config(*cfg));
     } else if (kind == SB_PIPELINE_N3P_DIRECT) {
-      a::N3PConfig pc;
-      pc.foot_ik = cfg->contact_ik != 0;
-      pc.calibration.enabled = cfg->auto_calibration != 0;
-      h->impl = std::make_unique<c::PipelineModel<c::N3PDirect>>(w->n3p, pc);
+      h->impl = std::make_unique<c::PipelineModel<c::N3PDirect>>(w->n3p, c::n3p_config(*cfg));
     } else if (kind == SB_PIPELINE_QUESTSIM) {
       a::QuestSimSessionConfig pc;  // contact_ik does not apply (a simulated body)
       pc.calibration.enabled = cfg->auto_calibration != 0;
       h->impl = std::make_unique<c::PipelineModel<c::QuestSim>>(w->questsim, pc);
     } else {
-      a::N3PPhysicsConfig pc;
+      a::N3PPhysicsConfig pc;  // its direct pipeline's defaults differ from N3PConfig's: set the two flags only
       pc.direct.foot_ik = cfg->contact_ik != 0;
       pc.direct.calibration.enabled = cfg->auto_calibration != 0;
       h->impl = std::make_unique<c::PipelineModel<c::N3PPhysics>>(w->n3p, pc);
@@ -436,6 +505,8 @@ SPARSEBODY_API sb_status sb_pipeline_destroy(sb_pipeline* p) {
   namespace c = sparsebody::capi;
   if (!p) return SB_OK;
   SB_CHECK_PIPELINE(p);
+  if (p->crowd)
+    return c::fail(p->error, SB_ERR_INVALID_ARGUMENT, "sb_pipeline_destroy: a crowd's user (sb_crowd_user): sb_crowd_destroy frees it");
   try {
     p->tag = c::kDeadTag;
     delete p;
@@ -461,12 +532,7 @@ SPARSEBODY_API sb_status sb_pipeline_push(sb_pipeline* p, const sb_tracker_frame
   SB_CHECK_PIPELINE(p);
   try {
   if (const sb_status s = c::check_frame(p->error, "sb_pipeline_push", frame); s != SB_OK) return s;
-  int bad = -1;  // a valid tracker with NaN/Inf: used as lost (the sanitizer's rule), said here
-  for (int k = 0; k < SB_TRACKER_COUNT; ++k)
-    if (((frame->valid >> k) & 1u) && !c::finite_pose(frame->pose[k])) {
-      bad = k;
-      break;
-    }
+  const int bad = c::nonfinite_tracker(*frame);  // used as lost (the sanitizer's rule), said here
   const int k = p->impl->push(c::to_frame(*frame), p->flags);
   p->steps = k;
   p->pushed = true;
@@ -658,7 +724,118 @@ SPARSEBODY_API sb_status sb_pipeline_calibration(sb_pipeline* p, sb_calibration_
   SB_CATCH_ALL(p->error)
 }
 
+// ---- crowds ----------------------------------------------------------------------------------------
+
+#define SB_CHECK_CROWD(c)                                                                                   \
+  do {                                                                                                      \
+    if (!(c)) return ::sparsebody::capi::fail(nullptr, SB_ERR_NULL, "%s: crowd is NULL", __func__);        \
+    if (!::sparsebody::capi::live(c, ::sparsebody::capi::kCrowdTag))                                        \
+      return ::sparsebody::capi::fail(nullptr, SB_ERR_BAD_HANDLE, "%s: not a live sb_crowd (foreign or destroyed)", __func__); \
+  } while (0)
+
+SPARSEBODY_API sb_status sb_crowd_create(const sb_weights* w, const sb_pipeline_config* cfg, int32_t users, sb_crowd** out) {
+  namespace c = sparsebody::capi;
+  namespace a = sparsebody::avatar;
+  if (!out) return c::fail(nullptr, SB_ERR_NULL, "sb_crowd_create: out is NULL");
+  *out = nullptr;
+  if (const sb_status s = c::check_create(w, cfg, "sb_crowd_create"); s != SB_OK) return s;
+  const int kind = cfg->pipeline;
+  if (kind != SB_PIPELINE_LOBSTR && kind != SB_PIPELINE_N3P_DIRECT)
+    return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_crowd_create: pipeline %d; a crowd is SB_PIPELINE_LOBSTR or SB_PIPELINE_N3P_DIRECT", kind);
+  if (cfg->window_mode) return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_crowd_create: window_mode 1; a crowd streams");
+  if (users < 1 || users > sparsebody::nn::kBatchMax)
+    return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_crowd_create: %d users, expected 1-%d", int(users), sparsebody::nn::kBatchMax);
+  try {
+    auto h = std::make_unique<sb_crowd>();
+    h->kind = kind;
+    h->users = users;
+    if (kind == SB_PIPELINE_LOBSTR)
+      h->impl = std::make_unique<c::CrowdModel<c::LoBSTr, a::LoBSTrBatch<c::LoBSTr>>>(w->lobstr, users, c::lobstr_config(*cfg));
+    else
+      h->impl = std::make_unique<c::CrowdModel<c::N3PDirect, a::N3PBatch<c::N3PDirect>>>(w->n3p, users, c::n3p_config(*cfg));
+    h->user = std::make_unique<sb_pipeline[]>(static_cast<std::size_t>(users));
+    h->view = std::make_unique<c::PipelineBase*[]>(static_cast<std::size_t>(users));
+    for (int i = 0; i < users; ++i) {
+      sb_pipeline& u = h->user[static_cast<std::size_t>(i)];
+      u.kind = kind;
+      u.crowd = h.get();
+      u.impl = h->impl->user_view(i);
+      h->view[static_cast<std::size_t>(i)] = u.impl.get();
+    }
+    *out = h.release();
+    return SB_OK;
+  }
+  SB_CATCH_ALL(nullptr)
+}
+
+SPARSEBODY_API sb_status sb_crowd_destroy(sb_crowd* cr) {
+  namespace c = sparsebody::capi;
+  if (!cr) return SB_OK;
+  SB_CHECK_CROWD(cr);
+  try {
+    for (int i = 0; i < cr->users; ++i) cr->user[static_cast<std::size_t>(i)].tag = c::kDeadTag;
+    cr->tag = c::kDeadTag;
+    delete cr;
+    return SB_OK;
+  }
+  SB_CATCH_ALL(nullptr)
+}
+
+SPARSEBODY_API sb_status sb_crowd_size(sb_crowd* cr, int32_t* users) {
+  namespace c = sparsebody::capi;
+  SB_CHECK_CROWD(cr);
+  if (!users) return c::fail(cr->error, SB_ERR_NULL, "sb_crowd_size: users is NULL");
+  *users = cr->users;
+  return SB_OK;
+}
+
+SPARSEBODY_API sb_status sb_crowd_push(sb_crowd* cr, const sb_tracker_frame* frames, int32_t count, int32_t* steps) {
+  namespace c = sparsebody::capi;
+  SB_CHECK_CROWD(cr);
+  try {
+  if (!frames) return c::fail(cr->error, SB_ERR_NULL, "sb_crowd_push: frames is NULL");
+  if (count != cr->users)
+    return c::fail(cr->error, SB_ERR_INVALID_ARGUMENT, "sb_crowd_push: %d frames for a crowd of %d users", int(count), cr->users);
+  sparsebody::trackers::TrackerFrame f[sparsebody::nn::kBatchMax];
+  int bad_user = -1, bad = -1;
+  for (int i = 0; i < count; ++i) {
+    char fn[64];
+    std::snprintf(fn, sizeof fn, "sb_crowd_push: user %d", i);
+    if (const sb_status s = c::check_frame(cr->error, fn, frames + i); s != SB_OK) return s;
+    if (bad_user < 0 && (bad = c::nonfinite_tracker(frames[i])) >= 0) bad_user = i;
+    f[i] = c::to_frame(frames[i]);
+  }
+  int k[sparsebody::nn::kBatchMax];
+  std::uint32_t flags[sparsebody::nn::kBatchMax];
+  cr->impl->push(f, cr->view.get(), k, flags);
+  for (int i = 0; i < count; ++i) {
+    sb_pipeline& u = cr->user[static_cast<std::size_t>(i)];
+    u.steps = k[i];
+    u.flags = flags[i];
+    u.pushed = true;
+    if (steps) steps[i] = k[i];
+  }
+  if (bad_user >= 0)
+    return c::fail(cr->error, SB_NONFINITE_POSE, "sb_crowd_push: user %d: tracker %d (%s) is flagged valid but not finite: treated as lost",
+                   bad_user, bad, sparsebody::trackers::tracker_name(bad));
+  return SB_OK;
+  }
+  SB_CATCH_ALL(cr->error)
+}
+
+SPARSEBODY_API sb_status sb_crowd_user(sb_crowd* cr, int32_t i, sb_pipeline** user) {
+  namespace c = sparsebody::capi;
+  SB_CHECK_CROWD(cr);
+  if (!user) return c::fail(cr->error, SB_ERR_NULL, "sb_crowd_user: user is NULL");
+  *user = nullptr;
+  if (i < 0 || i >= cr->users) return c::fail(cr->error, SB_ERR_INVALID_ARGUMENT, "sb_crowd_user: user %d outside 0-%d", int(i), cr->users - 1);
+  *user = &cr->user[static_cast<std::size_t>(i)];
+  return SB_OK;
+}
+
 }  // extern "C"
+
+#undef SB_CHECK_CROWD
 
 #undef SB_CHECK_PIPELINE
 #undef SB_CATCH_ALL
