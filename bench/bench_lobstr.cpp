@@ -102,12 +102,14 @@ void BM_NetworkOnly(benchmark::State& st) {
 }
 
 // N users per frame (st.range(0)), each on the clip from its own start frame: one LoBSTrBatch
-// step (batched = 1) against N LoBSTrPipeline steps (batched = 0) on the same frames. The time is
+// step (batched = 1) against N LoBSTrPipeline steps (batched = 0) on the same frames; batched = 3
+// / 2: the same through push (each user's stream: resampling, recentre and swap checks). The time is
 // per frame for all N users; per_user divides it by N.
 template <class P>
 void BM_Crowd(benchmark::State& st) {
   const int n = static_cast<int>(st.range(0));
-  const bool batched = st.range(1) != 0;
+  const int mode = static_cast<int>(st.range(1));  // batched (1, 3) or singles (0, 2); push (2, 3) or step (0, 1)
+  const bool batched = (mode & 1) != 0, push = mode >= 2;
   const auto w = weights<P>();
   avatar::LoBSTrBatch<P> crowd(w, n);
   std::vector<std::unique_ptr<P>> single;
@@ -122,16 +124,17 @@ void BM_Crowd(benchmark::State& st) {
     }
     ++t;
     if (batched) {
-      crowd.step(now.data());
+      if (push) crowd.push(now.data());
+      else crowd.step(now.data());
       benchmark::DoNotOptimize(crowd[n - 1].pose().local.data());
     } else {
-      for (int u = 0; u < n; ++u) single[u]->step(now[u]);
+      for (int u = 0; u < n; ++u) push ? void(single[u]->push(now[u])) : single[u]->step(now[u]);
       benchmark::DoNotOptimize(single[n - 1]->pose().local.data());
     }
     benchmark::ClobberMemory();
   }
   st.counters["per_user"] = benchmark::Counter(n, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);  // s
-  st.SetLabel(std::string(batched ? "one batch step" : "N single steps") + ", " + std::to_string(n) + " users");
+  st.SetLabel(std::string(batched ? "one batch " : "N single ") + (push ? "push" : "step") + ", " + std::to_string(n) + " users");
 }
 
 using avatar::LoBSTrCompact;
@@ -162,5 +165,7 @@ BENCHMARK_TEMPLATE(BM_Pipeline, LoBSTrPaperQ8)->Name("lobstr/paper/streaming_q8"
 SPARSEBODY_CROWD(LoBSTrCompact, "crowd/lobstr_compact");
 SPARSEBODY_CROWD(LoBSTrCompactQ8, "crowd/lobstr_compact_q8");
 SPARSEBODY_CROWD(LoBSTrCompactF16, "crowd/lobstr_compact_f16");
+BENCHMARK_TEMPLATE(BM_Crowd, LoBSTrCompact)->Name("crowd_push/lobstr_compact")->ArgsProduct({{16}, {2, 3}})
+    ->ArgNames({"users", "batched"})->Unit(benchmark::kMicrosecond);
 
 BENCHMARK_MAIN();

@@ -124,7 +124,8 @@ void BM_Crowd(benchmark::State& state) {
     return;
   }
   const int n = static_cast<int>(state.range(0));
-  const bool batched = state.range(1) != 0;
+  const int mode = static_cast<int>(state.range(1));  // batched (1, 3) or singles (0, 2); push (2, 3) or step (0, 1)
+  const bool batched = (mode & 1) != 0, push = mode >= 2;
   avatar::N3PBatch<P> crowd(*w, n);
   std::vector<std::unique_ptr<P>> single;
   for (int u = 0; u < n; ++u) single.push_back(std::make_unique<P>(*w));
@@ -137,10 +138,11 @@ void BM_Crowd(benchmark::State& state) {
     }
     ++t;
     if (batched) {
-      crowd.step(now.data());
+      if (push) crowd.push(now.data());
+      else crowd.step(now.data());
       benchmark::DoNotOptimize(crowd[n - 1].world().position.data());
     } else {
-      for (int u = 0; u < n; ++u) single[u]->step(now[u]);
+      for (int u = 0; u < n; ++u) push ? void(single[u]->push(now[u])) : single[u]->step(now[u]);
       benchmark::DoNotOptimize(single[n - 1]->world().position.data());
     }
     benchmark::ClobberMemory();
@@ -165,5 +167,8 @@ BENCHMARK_TEMPLATE(BM_Crowd, avatar::N3PDirect)->Name("crowd/n3p_direct")->ArgsP
 BENCHMARK_TEMPLATE(BM_Crowd, avatar::N3PDirectQ8)->Name("crowd/n3p_direct_q8")->ArgsProduct({{1, 4, 16, 64}, {0, 1}})
     ->ArgNames({"users", "batched"})->Unit(benchmark::kMicrosecond);
 BENCHMARK_TEMPLATE(BM_Crowd, avatar::N3PDirectF16)->Name("crowd/n3p_direct_f16")->ArgsProduct({{1, 4, 16, 64}, {0, 1}})
+    ->ArgNames({"users", "batched"})->Unit(benchmark::kMicrosecond);
+// The same through push (each user's stream), 16 users: batched 3 against singles 2.
+BENCHMARK_TEMPLATE(BM_Crowd, avatar::N3PDirect)->Name("crowd_push/n3p_direct")->ArgsProduct({{16}, {2, 3}})
     ->ArgNames({"users", "batched"})->Unit(benchmark::kMicrosecond);
 BENCHMARK_MAIN();
