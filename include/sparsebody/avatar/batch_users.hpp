@@ -1,7 +1,7 @@
 // The users of a many-avatar batch (avatar/lobstr_batch.hpp, n3p_batch.hpp): n pipelines built
 // from one weight set and, per user, the batch's IO buffers (each network's normalised input and
-// output) and the model ticks of the user's last input frame (push). Allocated once at
-// construction; n outside 1..nn::kBatchMax is refused there.
+// output) and the model ticks of the user's last input frame (push); and BatchCalls, the calls
+// every batch offers. Allocated once at construction; n outside 1..nn::kBatchMax is refused there.
 #pragma once
 #include <algorithm>
 #include <memory>
@@ -81,6 +81,49 @@ class BatchUsers {
   };
   int per_user_ = 1;               // the stream's max_ticks_per_push()
   std::unique_ptr<Tick[]> ticks_;  // n x per_user_
+};
+
+// What every batch offers (CRTP over LoBSTrBatch, N3PBatch): the users, step() on model-rate
+// frames and push() on device frames. Derived has a BatchUsers users_ and
+// step_users(who, m, frames, restarts), which steps users who[0..m) on frames[k] together.
+template <class Derived>
+class BatchCalls {
+ public:
+  int size() const noexcept { return self().users_.size(); }
+  decltype(auto) operator[](int i) noexcept { return self().users_[i]; }
+  decltype(auto) operator[](int i) const noexcept { return self().users_[i]; }
+
+  // One model frame of every user: frames[i] is user i's; restart (optional) as each
+  // pipeline's step(frame, restart).
+  void step(const trackers::TrackerFrame* frames, const bool* restart = nullptr) noexcept {
+    int who[nn::kBatchMax];
+    const trackers::TrackerFrame* f[nn::kBatchMax];
+    bool r[nn::kBatchMax];
+    for (int i = 0; i < size(); ++i) who[i] = i, f[i] = frames + i, r[i] = restart != nullptr && restart[i];
+    self().step_users(who, size(), f, r);
+  }
+
+  // One input frame of every user at any rate (frames[i] is user i's), as each pipeline's push:
+  // each user's own stream resamples it, finds recentres and controllers in the other hands, and
+  // the model ticks it completes are stepped, the users' networks together. Returns the number of
+  // user steps run.
+  int push(const trackers::TrackerFrame* frames) noexcept {
+    return push(frames, [](int, const trackers::TrackerFrame&, bool) {});
+  }
+  // The same, calling after(user, tick, gap) after each user's step (as a pipeline's push(f, after)).
+  template <class After>
+  int push(const trackers::TrackerFrame* frames, After&& after) noexcept {
+    return self().users_.push(
+        frames,
+        [this](const int* who, int m, const trackers::TrackerFrame* const* ticks, const bool* gaps) {
+          self().step_users(who, m, ticks, gaps);
+        },
+        after);
+  }
+
+ private:
+  Derived& self() noexcept { return static_cast<Derived&>(*this); }
+  const Derived& self() const noexcept { return static_cast<const Derived&>(*this); }
 };
 
 }  // namespace sparsebody::avatar

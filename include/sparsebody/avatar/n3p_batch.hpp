@@ -28,7 +28,7 @@
 namespace sparsebody::avatar {
 
 template <class Pipeline>
-class N3PBatch {
+class N3PBatch : public BatchCalls<N3PBatch<Pipeline>> {
  public:
   using Predictor = std::remove_reference_t<decltype(std::declval<Pipeline&>().predictor())>;
   using SigNet = typename Predictor::SigNet;
@@ -39,37 +39,10 @@ class N3PBatch {
 
   // n users, 1 <= n <= nn::kBatchMax (64); cfg as for each N3PPipeline.
   N3PBatch(const Weights& w, int n, N3PConfig cfg = {}) : users_("N3PBatch", n, w, cfg) {}
-
-  int size() const noexcept { return users_.size(); }
-  Pipeline& operator[](int i) noexcept { return users_[i]; }
-  const Pipeline& operator[](int i) const noexcept { return users_[i]; }
-
-  // One model frame of every user: frames[i] is user i's; restart (optional) as step()'s.
-  void step(const trackers::TrackerFrame* frames, const bool* restart = nullptr) noexcept {
-    int who[nn::kBatchMax];
-    const trackers::TrackerFrame* f[nn::kBatchMax];
-    bool r[nn::kBatchMax];
-    for (int i = 0; i < size(); ++i) who[i] = i, f[i] = frames + i, r[i] = restart != nullptr && restart[i];
-    step_users(who, size(), f, r);
-  }
-
-  // One input frame of every user at any rate (frames[i] is user i's), as N3PPipeline::push: each
-  // user's own stream resamples it, finds recentres and controllers in the other hands, and the
-  // model ticks it completes are stepped, the users' networks together. Returns the number of user
-  // steps run.
-  int push(const trackers::TrackerFrame* frames) noexcept {
-    return push(frames, [](int, const trackers::TrackerFrame&, bool) {});
-  }
-  // The same, calling after(user, tick, gap) after each user's step (as N3PPipeline::push(f, after)).
-  template <class After>
-  int push(const trackers::TrackerFrame* frames, After&& after) noexcept {
-    return users_.push(
-        frames,
-        [this](const int* who, int m, const trackers::TrackerFrame* const* ticks, const bool* gaps) { step_users(who, m, ticks, gaps); },
-        after);
-  }
+  // size(), operator[] (user i's pipeline), step(frames), push(frames): BatchCalls (avatar/batch_users.hpp).
 
  private:
+  friend class BatchCalls<N3PBatch>;
   // Users who[0..m) step on frames f[k] (restart r[k]); G_sig, G_lo and G_up each run once for all.
   void step_users(const int* users, int n, const trackers::TrackerFrame* const* f, const bool* r) noexcept {
     int who[nn::kBatchMax];
