@@ -29,6 +29,9 @@ public enum Status : int {
 }
 
 public enum Model : int { LoBSTr = 1, N3P = 2, QuestSim = 3 }
+// How weights are stored in memory: Auto picks int8 where the library's build has a SIMD int8 kernel
+// (AVX2, NEON on headsets), else float. LoBSTr and N3P take any; QuestSim float only.
+public enum Storage : int { Auto = 0, Float = 1, F16 = 2, Int8 = 3 }
 public enum PipelineKind : int { LoBSTr = 1, N3PDirect = 2, N3PPhysics = 3, QuestSim = 4 }
 
 [Flags]
@@ -117,6 +120,9 @@ public static class Native {
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)]
   public static extern Status sb_weights_load(Model model, [MarshalAs(UnmanagedType.LPStr)] string path, out WeightsHandle w);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)]
+  public static extern Status sb_weights_load_storage(Model model, [MarshalAs(UnmanagedType.LPStr)] string path, Storage storage, out WeightsHandle w);
+  [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_weights_storage(WeightsHandle w, out Storage storage);
+  [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)]
   public static extern Status sb_weights_load_n3p([MarshalAs(UnmanagedType.LPStr)] string upper, [MarshalAs(UnmanagedType.LPStr)] string lower,
                                                   [MarshalAs(UnmanagedType.LPStr)] string signal, out WeightsHandle w);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_weights_destroy(IntPtr w);
@@ -174,11 +180,21 @@ public sealed class Weights : IDisposable {
   Weights(WeightsHandle h, Model m) { Handle = h; Model = m; }
 
   // LoBSTr: the weights file; N3P: a prefix ("dir/n3p"), one of its three files or their directory.
-  public static Weights Load(Model model, string path) {
+  public static Weights Load(Model model, string path) { return Load(model, path, Storage.Float); }
+  public static Weights Load(Model model, string path, Storage storage) {
     WeightsHandle h;
-    Status s = Native.sb_weights_load(model, path, out h);
+    Status s = Native.sb_weights_load_storage(model, path, storage, out h);
     if (s < 0) throw new SparsebodyException(s, Marshal.PtrToStringAnsi(Native.sb_last_error(IntPtr.Zero)));
     return new Weights(h, model);
+  }
+  // The storage taken (Auto resolved).
+  public Storage Storage {
+    get {
+      Storage s;
+      Status st = Native.sb_weights_storage(Handle, out s);
+      if (st < 0) throw new SparsebodyException(st, Marshal.PtrToStringAnsi(Native.sb_last_error(IntPtr.Zero)));
+      return s;
+    }
   }
   public static Weights LoadN3P(string upper, string lower, string signal) {
     WeightsHandle h;

@@ -138,6 +138,22 @@ static class CSharpTest {
     catch (SparsebodyException e) { Expect(e.Status == Status.ErrInvalidArgument || e.Status == Status.ErrMismatch, "physics crowd: " + e.Message); }
   }
 
+  // Weights in another storage: an int8 LoBSTr pipeline runs, and auto resolves to float or int8.
+  static void Storages(string weightsDir, List<TrackerFrame> frames) {
+    using (var w = Weights.Load(Model.LoBSTr, weightsDir + "/lobstr_compact.weights.json", Storage.Int8))
+    using (var p = new Pipeline(w, PipelineKind.LoBSTr)) {
+      Expect(w.Storage == Storage.Int8, "int8 storage: " + w.Storage);
+      var pos = new Vec3f[p.JointCount];
+      int poses = 0;
+      foreach (var fr in frames) { var f = fr; p.Push(ref f); PoseInfo info; if (p.Read(null, pos, out info)) ++poses; }
+      Expect(poses > 100, "int8 LoBSTr: " + poses + " poses");
+    }
+    using (var w = Weights.Load(Model.N3P, weightsDir + "/n3p", Storage.Auto))
+      Expect(w.Storage == Storage.Int8 || w.Storage == Storage.Float, "auto storage: " + w.Storage);
+    try { Weights.Load(Model.QuestSim, weightsDir + "/questsim_policy.json", Storage.F16); Expect(false, "f16 QuestSim loaded"); }
+    catch (SparsebodyException e) { Expect(e.Status == Status.ErrUnsupported, "f16 QuestSim: " + e.Message); }
+  }
+
   static void ErrorPaths(string weightsDir) {
     try { Weights.Load(Model.LoBSTr, "/nonexistent.json"); Expect(false, "missing file loaded"); }
     catch (SparsebodyException e) { Expect(e.Status == Status.ErrLoad && e.Message.Contains("/nonexistent.json"), "missing file: " + e.Message); }
@@ -179,6 +195,7 @@ static class CSharpTest {
       CompareCrowd("n3p", n3p, PipelineKind.N3PDirect, frames, args[2] + "/n3p_direct.ref");
       Compare("n3p_physics", n3p, PipelineKind.N3PPhysics, frames, args[2] + "/n3p_physics.ref");
     }
+    Storages(args[1], frames);
     ErrorPaths(args[1]);
     Console.WriteLine(failures == 0 ? "C# binding: all checks passed" : "C# binding: " + failures + " checks FAILED");
     return failures == 0 ? 0 : 1;

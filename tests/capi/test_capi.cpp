@@ -20,6 +20,7 @@
 #include "sparsebody/avatar/n3p_physics.hpp"
 #include "sparsebody/avatar/questsim_session.hpp"
 #include "sparsebody/c/sparsebody.h"
+#include "sparsebody/nn/storage.hpp"
 #include "support/alloc_counter.hpp"
 
 using namespace sparsebody;
@@ -465,8 +466,21 @@ TEST_CASE("messages: per handle, per thread; status names") {
 // The C API against the C++ pipelines on the same frames, bit for bit: every float of the pose,
 // the contacts, the calibration.
 template <class P>
-void check_parity(P& cpp, int kind) {
-  sb_pipeline* p = create(kind);
+void check_parity(P& cpp, int kind, int storage = SB_STORAGE_FLOAT) {
+  sb_weights* stored = nullptr;  // weights of another storage than the shared float ones
+  sb_pipeline* p = nullptr;
+  if (storage == SB_STORAGE_FLOAT) {
+    p = create(kind);
+  } else {
+    const std::string path = kind == SB_PIPELINE_LOBSTR ? kWeights + "/lobstr_compact.weights.json" : kWeights + "/n3p";
+    REQUIRE(sb_weights_load_storage(kind == SB_PIPELINE_LOBSTR ? SB_MODEL_LOBSTR : SB_MODEL_N3P, path.c_str(), storage, &stored) == SB_OK);
+    int32_t got = -1;
+    REQUIRE(sb_weights_storage(stored, &got) == SB_OK);
+    CHECK(got == storage);
+    sb_pipeline_config c;
+    REQUIRE(sb_pipeline_config_init(&c, kind) == SB_OK);
+    REQUIRE(sb_pipeline_create(stored, &c, &p) == SB_OK);
+  }
   const int n = cpp.skeleton().size();
   std::vector<sb_quatf> rot(static_cast<std::size_t>(n));
   std::vector<sb_vec3f> pos(static_cast<std::size_t>(n));
@@ -515,6 +529,7 @@ void check_parity(P& cpp, int kind) {
   CHECK(r.stature == cpp.calibration_report().stature);
   CHECK(std::string(r.message) == cpp.calibration_report().message);
   sb_pipeline_destroy(p);
+  sb_weights_destroy(stored);
 }
 
 TEST_CASE("the C API's output equals the C++ pipelines' bit for bit (same frames through both)") {
@@ -534,6 +549,51 @@ TEST_CASE("the C API's output equals the C++ pipelines' bit for bit (same frames
     avatar::QuestSimSessionDefault cpp(avatar::QuestSimSessionDefault::load(kWeights + "/questsim_policy.json"));
     check_parity(cpp, SB_PIPELINE_QUESTSIM);
   }
+  // Other weight storage (sb_weights_load_storage) against the C++ pipelines of that storage.
+  SUBCASE("LoBSTr, int8 weights") {
+    avatar::LoBSTrCompactQ8 cpp(avatar::LoBSTrCompactQ8::load(kWeights + "/lobstr_compact.weights.json"));
+    check_parity(cpp, SB_PIPELINE_LOBSTR, SB_STORAGE_INT8);
+  }
+  SUBCASE("LoBSTr, f16 weights") {
+    avatar::LoBSTrCompactF16 cpp(avatar::LoBSTrCompactF16::load(kWeights + "/lobstr_compact.weights.json"));
+    check_parity(cpp, SB_PIPELINE_LOBSTR, SB_STORAGE_F16);
+  }
+  SUBCASE("Neural3Points direct, int8 weights") {
+    avatar::N3PDirectQ8 cpp(avatar::N3PDirectQ8::load(kWeights + "/n3p"));
+    check_parity(cpp, SB_PIPELINE_N3P_DIRECT, SB_STORAGE_INT8);
+  }
+  SUBCASE("Neural3Points physics, int8 weights") {
+    avatar::N3PPhysicsQ8 cpp(avatar::N3PDirectQ8::load(kWeights + "/n3p"));
+    check_parity(cpp, SB_PIPELINE_N3P_PHYSICS, SB_STORAGE_INT8);
+  }
+}
+
+TEST_CASE("weight storage: auto follows the build's rule, QuestSim is float only, bad values refused") {
+  sb_weights* w = nullptr;
+  const std::string lobstr = kWeights + "/lobstr_compact.weights.json";
+  REQUIRE(sb_weights_load_storage(SB_MODEL_LOBSTR, lobstr.c_str(), SB_STORAGE_AUTO, &w) == SB_OK);
+  int32_t s = -1;
+  REQUIRE(sb_weights_storage(w, &s) == SB_OK);
+  CHECK(s == (nn::fastest_storage().storage == nn::Storage::q8 ? SB_STORAGE_INT8 : SB_STORAGE_FLOAT));
+  CHECK(sb_weights_storage(w, nullptr) == SB_ERR_NULL);
+  sb_weights_destroy(w);
+  w = nullptr;
+  REQUIRE(sb_weights_load(SB_MODEL_LOBSTR, lobstr.c_str(), &w) == SB_OK);
+  REQUIRE(sb_weights_storage(w, &s) == SB_OK);
+  CHECK(s == SB_STORAGE_FLOAT);  // sb_weights_load: float, as before
+  sb_weights_destroy(w);
+  w = nullptr;
+  CHECK(sb_weights_load_storage(SB_MODEL_LOBSTR, lobstr.c_str(), 7, &w) == SB_ERR_INVALID_ARGUMENT);
+  CHECK(mentions(nullptr, "unknown storage 7"));
+  CHECK(w == nullptr);
+  const std::string q = kWeights + "/questsim_policy.json";
+  CHECK(sb_weights_load_storage(SB_MODEL_QUESTSIM, q.c_str(), SB_STORAGE_INT8, &w) == SB_ERR_UNSUPPORTED);
+  CHECK(mentions(nullptr, "float only"));
+  REQUIRE(sb_weights_load_storage(SB_MODEL_QUESTSIM, q.c_str(), SB_STORAGE_AUTO, &w) == SB_OK);
+  REQUIRE(sb_weights_storage(w, &s) == SB_OK);
+  CHECK(s == SB_STORAGE_FLOAT);
+  sb_weights_destroy(w);
+  CHECK(sb_weights_storage(nullptr, &s) == SB_ERR_NULL);
 }
 
 TEST_CASE("push and read allocate nothing (every pipeline, NaN frames, gaps, errors, calibration)") {

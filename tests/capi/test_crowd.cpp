@@ -56,18 +56,25 @@ std::vector<std::vector<sb_tracker_frame>> user_frames() {
 
 bool same_bits(const void* a, const void* b, std::size_t n) { return std::memcmp(a, b, n) == 0; }
 
-void check_crowd_equals_pipelines(int kind) {
+void check_crowd_equals_pipelines(int kind, int storage = SB_STORAGE_FLOAT) {
   const auto in = user_frames();
   const sb_pipeline_config cfg = config(kind);
+  sb_weights* w = weights(kind);
+  sb_weights* stored = nullptr;
+  if (storage != SB_STORAGE_FLOAT) {
+    const std::string path = kind == SB_PIPELINE_LOBSTR ? kWeights + "/lobstr_compact.weights.json" : kWeights + "/n3p";
+    REQUIRE(sb_weights_load_storage(kind == SB_PIPELINE_LOBSTR ? SB_MODEL_LOBSTR : SB_MODEL_N3P, path.c_str(), storage, &stored) == SB_OK);
+    w = stored;
+  }
   sb_crowd* crowd = nullptr;
-  REQUIRE(sb_crowd_create(weights(kind), &cfg, kUsers, &crowd) == SB_OK);
+  REQUIRE(sb_crowd_create(w, &cfg, kUsers, &crowd) == SB_OK);
   int32_t size = 0;
   REQUIRE(sb_crowd_size(crowd, &size) == SB_OK);
   CHECK(size == kUsers);
   sb_pipeline* single[kUsers];
   sb_pipeline* user[kUsers];
   for (int u = 0; u < kUsers; ++u) {
-    REQUIRE(sb_pipeline_create(weights(kind), &cfg, &single[u]) == SB_OK);
+    REQUIRE(sb_pipeline_create(w, &cfg, &single[u]) == SB_OK);
     REQUIRE(sb_crowd_user(crowd, u, &user[u]) == SB_OK);
   }
   int32_t n = 0;
@@ -143,6 +150,7 @@ void check_crowd_equals_pipelines(int kind) {
   }
   CHECK(ok > kUsers * 500);
   CHECK(sb_crowd_destroy(crowd) == SB_OK);
+  sb_weights_destroy(stored);
 }
 
 }  // namespace
@@ -150,6 +158,8 @@ void check_crowd_equals_pipelines(int kind) {
 TEST_CASE("a crowd's users equal pipelines of their own through the C API, bit for bit, without allocating") {
   SUBCASE("LoBSTr") { check_crowd_equals_pipelines(SB_PIPELINE_LOBSTR); }
   SUBCASE("Neural3Points direct") { check_crowd_equals_pipelines(SB_PIPELINE_N3P_DIRECT); }
+  SUBCASE("LoBSTr, int8 weights") { check_crowd_equals_pipelines(SB_PIPELINE_LOBSTR, SB_STORAGE_INT8); }
+  SUBCASE("Neural3Points direct, f16 weights") { check_crowd_equals_pipelines(SB_PIPELINE_N3P_DIRECT, SB_STORAGE_F16); }
 }
 
 TEST_CASE("crowds: every bad argument") {

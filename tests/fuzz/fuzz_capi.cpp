@@ -72,13 +72,17 @@ sb_tracker_frame frame(Bytes& b, double& t, int k) {
 }
 
 struct Weights {
-  sb_weights* lobstr = nullptr;
-  sb_weights* n3p = nullptr;
+  sb_weights* lobstr[3] = {};  // float, f16, int8 storage
+  sb_weights* n3p[3] = {};
   sb_weights* questsim = nullptr;
   Weights() {
-    if (sb_weights_load(SB_MODEL_LOBSTR, SPARSEBODY_SOURCE_DIR "/examples/weights/lobstr_compact.weights.json", &lobstr) != SB_OK ||
-        sb_weights_load(SB_MODEL_N3P, SPARSEBODY_SOURCE_DIR "/examples/weights/n3p", &n3p) != SB_OK ||
-        sb_weights_load(SB_MODEL_QUESTSIM, SPARSEBODY_SOURCE_DIR "/examples/weights/questsim_policy.json", &questsim) != SB_OK) {
+    bool ok = sb_weights_load(SB_MODEL_QUESTSIM, SPARSEBODY_SOURCE_DIR "/examples/weights/questsim_policy.json", &questsim) == SB_OK;
+    for (int s = 0; s < 3; ++s)
+      ok = ok &&
+           sb_weights_load_storage(SB_MODEL_LOBSTR, SPARSEBODY_SOURCE_DIR "/examples/weights/lobstr_compact.weights.json", SB_STORAGE_FLOAT + s,
+                                   &lobstr[s]) == SB_OK &&
+           sb_weights_load_storage(SB_MODEL_N3P, SPARSEBODY_SOURCE_DIR "/examples/weights/n3p", SB_STORAGE_FLOAT + s, &n3p[s]) == SB_OK;
+    if (!ok) {
       std::fprintf(stderr, "fuzz_capi: cannot load the shipped weights: %s\n", sb_last_error(nullptr));
       std::abort();
     }
@@ -90,7 +94,9 @@ struct Weights {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static Weights W;
   Bytes b{data, size};
-  const int kind = 1 + b.u8() % 4;  // LoBSTr, N3P direct, N3P physics, QuestSim
+  const std::uint8_t kb = b.u8();
+  const int kind = 1 + kb % 4;       // LoBSTr, N3P direct, N3P physics, QuestSim
+  const int storage = (kb >> 2) % 3;  // float, f16 or int8 weights (LoBSTr and Neural3Points)
   sb_pipeline_config cfg{};
   check(sb_pipeline_config_init(&cfg, kind), nullptr, "config_init");
   const std::uint8_t c = b.u8();
@@ -101,8 +107,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   cfg.window_mode = (c >> 4) & 1;
   if (c & 32) cfg.pipeline = 77;
   // the pipeline's own weights, or (bit 6) another model's
-  const sb_weights* own = kind == 1 ? W.lobstr : kind == 4 ? W.questsim : W.n3p;
-  const sb_weights* other = kind == 1 ? W.n3p : W.lobstr;
+  const sb_weights* own = kind == 1 ? W.lobstr[storage] : kind == 4 ? W.questsim : W.n3p[storage];
+  const sb_weights* other = kind == 1 ? W.n3p[storage] : W.lobstr[storage];
   const sb_weights* w = (c & 64) ? other : own;
   sb_pipeline* p = nullptr;
   sb_crowd* crowd = nullptr;

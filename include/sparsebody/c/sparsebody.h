@@ -81,6 +81,18 @@ typedef enum sb_model {
   SB_MODEL_QUESTSIM = 3  /* one file, e.g. examples/weights/questsim_policy.json (kind questsim_policy) */
 } sb_model;
 
+/* How a weight set is stored in memory (sb_weights_load_storage). The files are float JSON either way:
+ * f16 and int8 are made at load time. AUTO: the fastest for the CPU this library was built for
+ * (int8 wherever it has a SIMD int8 kernel: AVX2, AVX-VNNI, AVX-512 VNNI, NEON; else float).
+ * int8 is approximate (per-row weight scales, per-step input scales: nn/int8.hpp); f16 rounds weights
+ * to half precision. */
+typedef enum sb_storage {
+  SB_STORAGE_AUTO = 0,
+  SB_STORAGE_FLOAT = 1,
+  SB_STORAGE_F16 = 2,
+  SB_STORAGE_INT8 = 3
+} sb_storage;
+
 typedef enum sb_pipeline_kind {
   SB_PIPELINE_LOBSTR = 1,      /* SB_MODEL_LOBSTR weights; needs the pelvis tracker */
   SB_PIPELINE_N3P_DIRECT = 2,  /* SB_MODEL_N3P weights; headset + controllers */
@@ -170,6 +182,11 @@ SPARSEBODY_API const char* sb_last_error(const void* handle);
  * dir/n3p_upper.json ...), one of the three files, or a directory holding n3p_*.json.
  * *out is NULL on failure. */
 SPARSEBODY_API sb_status sb_weights_load(int32_t model, const char* path, sb_weights** out);
+/* The same with a storage (sb_storage; sb_weights_load is SB_STORAGE_FLOAT). LoBSTr and Neural3Points
+ * (every pipeline made from them, crowds too) take any; QuestSim float only (AUTO gives float,
+ * F16 / INT8 are SB_ERR_UNSUPPORTED). sb_weights_storage tells the storage taken (AUTO resolved). */
+SPARSEBODY_API sb_status sb_weights_load_storage(int32_t model, const char* path, int32_t storage, sb_weights** out);
+SPARSEBODY_API sb_status sb_weights_storage(const sb_weights* w, int32_t* storage);
 /* Neural3Points from three explicit paths. */
 SPARSEBODY_API sb_status sb_weights_load_n3p(const char* upper, const char* lower, const char* signal, sb_weights** out);
 SPARSEBODY_API sb_status sb_weights_model(const sb_weights* w, int32_t* model);

@@ -9,7 +9,8 @@
 // A crowd (sb_crowd) is one avatar::LoBSTrBatch / N3PBatch; its users' handles are sb_pipelines whose
 // impl views the batch's pipelines.
 // Builds: LoBSTr compact (H 256, latent 128), Neural3Points direct and physics (the paper's sizes),
-// QuestSim (avatar/questsim_session.hpp: the torque policy on a simulated avatar sized by the automatic
+// each with float, f16 and int8 weights (Builds<W>, sb_weights_load_storage); QuestSim
+// (avatar/questsim_session.hpp: the torque policy on a simulated avatar sized by the automatic
 // calibration), float weights.
 #pragma once
 #include <cmath>
@@ -35,6 +36,7 @@
 #include "sparsebody/c/sparsebody.h"
 #include "sparsebody/core/error.hpp"
 #include "sparsebody/io/weights_json.hpp"
+#include "sparsebody/nn/storage.hpp"
 
 namespace sparsebody::capi {
 
@@ -48,6 +50,33 @@ using LoBSTr = avatar::LoBSTrCompact;
 using N3PDirect = avatar::N3PDirect;
 using N3PPhysics = avatar::N3PPhysicsDefaultSizes<float>;
 using QuestSim = avatar::QuestSimSessionDefault;
+
+// The LoBSTr and Neural3Points builds per weight storage W (float, nn::f16, nn::q8).
+template <class W>
+struct Builds {
+  using LoBSTr = avatar::LoBSTrPipeline<float, 256, 128, W>;
+  using N3PDirect = avatar::N3PPipeline<float, 64, 128, 128, W>;
+  using N3PPhysics = avatar::N3PPhysicsDefaultSizes<W>;
+};
+
+template <class P>
+inline constexpr bool kIsLoBSTr = std::is_same_v<P, Builds<float>::LoBSTr> || std::is_same_v<P, Builds<nn::f16>::LoBSTr> ||
+                                  std::is_same_v<P, Builds<nn::q8>::LoBSTr>;
+template <class P>
+inline constexpr bool kIsN3PPhysics = std::is_same_v<P, Builds<float>::N3PPhysics> || std::is_same_v<P, Builds<nn::f16>::N3PPhysics> ||
+                                      std::is_same_v<P, Builds<nn::q8>::N3PPhysics>;
+
+template <class W>
+struct StorageTag {
+  using type = W;
+};
+// f(StorageTag<W>{}) for the weight type W of a resolved storage (SB_STORAGE_FLOAT / F16 / INT8).
+template <class F>
+decltype(auto) with_storage(std::int32_t storage, F&& f) {
+  if (storage == SB_STORAGE_F16) return f(StorageTag<nn::f16>{});
+  if (storage == SB_STORAGE_INT8) return f(StorageTag<nn::q8>{});
+  return f(StorageTag<float>{});
+}
 
 inline char* thread_message() noexcept {
   static thread_local char m[kMessage] = "";
@@ -92,9 +121,9 @@ struct PipelineModel final : PipelineBase {
   explicit PipelineModel(P& user) : p(user) {}
 
   static constexpr bool kQuestSim = std::is_same_v<P, QuestSim>;
-  static constexpr bool kPhysics = std::is_same_v<P, N3PPhysics> || kQuestSim;
+  static constexpr bool kPhysics = kIsN3PPhysics<P> || kQuestSim;
   const trackers::SanitizedFrame& sanitized() const noexcept {
-    if constexpr (std::is_same_v<P, N3PPhysics>) return p.direct().tracker_stream().last_sanitized();
+    if constexpr (kIsN3PPhysics<P>) return p.direct().tracker_stream().last_sanitized();
     else if constexpr (kQuestSim) return p.pipeline().tracker_stream().last_sanitized();
     else return p.tracker_stream().last_sanitized();
   }
@@ -136,7 +165,7 @@ struct PipelineModel final : PipelineBase {
     if constexpr (kQuestSim) {
       p.set_user_scale(scale);  // QuestSim: the avatar's size (a stature outside 1.0-2.4 m is ignored)
       p.pipeline().set_body_convention(true);  // trackers at the joints face +Z (the swap check's heading)
-    } else if constexpr (std::is_same_v<P, LoBSTr>) {
+    } else if constexpr (kIsLoBSTr<P>) {
       features::Calibration c;
       c.scale = scale;
       p.set_calibration(c);
@@ -189,8 +218,13 @@ struct CrowdModel final : CrowdBase {
 struct sb_weights {
   std::uint64_t tag = sparsebody::capi::kWeightsTag;
   std::int32_t model = 0;
+  std::int32_t storage = SB_STORAGE_FLOAT;  // resolved: FLOAT, F16 or INT8; the fields of that storage are set
   std::shared_ptr<const sparsebody::capi::LoBSTr::Weights> lobstr;
+  std::shared_ptr<const sparsebody::capi::Builds<sparsebody::nn::f16>::LoBSTr::Weights> lobstr_f16;
+  std::shared_ptr<const sparsebody::capi::Builds<sparsebody::nn::q8>::LoBSTr::Weights> lobstr_q8;
   sparsebody::capi::N3PDirect::Weights n3p;
+  sparsebody::capi::Builds<sparsebody::nn::f16>::N3PDirect::Weights n3p_f16;
+  sparsebody::capi::Builds<sparsebody::nn::q8>::N3PDirect::Weights n3p_q8;
   std::shared_ptr<const sparsebody::capi::QuestSim::Weights> questsim;
   char error[sparsebody::capi::kMessage] = "";
 };
@@ -299,12 +333,29 @@ inline bool is_dir(const char* path) noexcept {
 }
 
 // Loads and checks N3P weights by building one pipeline (its constructor validates the skeleton).
+// The weights of storage W in a handle.
+template <class W, class H>
+auto& lobstr_of(H& w) noexcept {
+  if constexpr (std::is_same_v<W, nn::f16>) return w.lobstr_f16;
+  else if constexpr (std::is_same_v<W, nn::q8>) return w.lobstr_q8;
+  else return w.lobstr;
+}
+template <class W, class H>
+auto& n3p_of(H& w) noexcept {
+  if constexpr (std::is_same_v<W, nn::f16>) return w.n3p_f16;
+  else if constexpr (std::is_same_v<W, nn::q8>) return w.n3p_q8;
+  else return w.n3p;
+}
+
+template <class W>
 inline void load_n3p(sb_weights& w, const std::string& sig, const std::string& lo, const std::string& up) {
-  using Pred = N3PDirect::Predictor;
-  w.n3p.sig = nn::NetworkWeights<Pred::SigNet>::load(sig, networks::kN3PSignalKind);
-  w.n3p.lo = nn::NetworkWeights<Pred::LoNet>::load(lo, networks::kN3PLowerKind);
-  w.n3p.up = nn::NetworkWeights<Pred::UpNet>::load(up, networks::kN3PUpperKind);
-  N3PDirect check(w.n3p);
+  using Direct = typename Builds<W>::N3PDirect;
+  using Pred = typename Direct::Predictor;
+  auto& n = n3p_of<W>(w);
+  n.sig = nn::NetworkWeights<typename Pred::SigNet>::load(sig, networks::kN3PSignalKind);
+  n.lo = nn::NetworkWeights<typename Pred::LoNet>::load(lo, networks::kN3PLowerKind);
+  n.up = nn::NetworkWeights<typename Pred::UpNet>::load(up, networks::kN3PUpperKind);
+  Direct check(n);
   (void)check;
 }
 
@@ -379,15 +430,27 @@ SPARSEBODY_API const char* sb_last_error(const void* handle) {
 }
 
 SPARSEBODY_API sb_status sb_weights_load(int32_t model, const char* path, sb_weights** out) {
+  return sb_weights_load_storage(model, path, SB_STORAGE_FLOAT, out);
+}
+
+SPARSEBODY_API sb_status sb_weights_load_storage(int32_t model, const char* path, int32_t storage, sb_weights** out) {
   namespace c = sparsebody::capi;
+  namespace nn = sparsebody::nn;
   if (!out) return c::fail(nullptr, SB_ERR_NULL, "sb_weights_load: out is NULL");
   *out = nullptr;
   if (!path) return c::fail(nullptr, SB_ERR_NULL, "sb_weights_load: path is NULL");
   try {
     if (model != SB_MODEL_LOBSTR && model != SB_MODEL_N3P && model != SB_MODEL_QUESTSIM)
       return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_weights_load: unknown model %d", int(model));
+    if (storage < SB_STORAGE_AUTO || storage > SB_STORAGE_INT8)
+      return c::fail(nullptr, SB_ERR_INVALID_ARGUMENT, "sb_weights_load: unknown storage %d", int(storage));
+    if (storage == SB_STORAGE_AUTO)  // the build's rule (nn/storage.hpp), without the f16 size test
+      storage = model == SB_MODEL_QUESTSIM || nn::fastest_storage().storage != nn::Storage::q8 ? SB_STORAGE_FLOAT : SB_STORAGE_INT8;
+    if (model == SB_MODEL_QUESTSIM && storage != SB_STORAGE_FLOAT)
+      return c::fail(nullptr, SB_ERR_UNSUPPORTED, "sb_weights_load: QuestSim weights are float only in this library (storage %d)", int(storage));
     auto w = std::make_unique<sb_weights>();
     w->model = model;
+    w->storage = storage;
     if (model == SB_MODEL_LOBSTR) {
       // the sizes from the file's meta first, as the demo does: a clear message for other builds
       const sparsebody::io::WeightsDocument doc = sparsebody::io::read_weights_file(path);
@@ -399,7 +462,10 @@ SPARSEBODY_API sb_status sb_weights_load(int32_t model, const char* path, sb_wei
       if (hidden != c::LoBSTr::kHidden || latent != c::LoBSTr::kLatent)
         return c::fail(nullptr, SB_ERR_UNSUPPORTED, "%s: LoBSTr H=%d latent=%d; this build has H=%d latent=%d only", path, hidden, latent,
                        c::LoBSTr::kHidden, c::LoBSTr::kLatent);
-      w->lobstr = c::LoBSTr::load(path);
+      c::with_storage(storage, [&](auto tag) {
+        using W = typename decltype(tag)::type;
+        c::lobstr_of<W>(*w) = c::Builds<W>::LoBSTr::load(path);
+      });
     } else if (model == SB_MODEL_QUESTSIM) {
       w->questsim = c::QuestSim::load(path);  // kind "questsim_policy", the default avatar's sizes
     } else {
@@ -412,12 +478,23 @@ SPARSEBODY_API sb_status sb_weights_load(int32_t model, const char* path, sb_wei
           break;
         }
       }
-      c::load_n3p(*w, p + "_signal.json", p + "_lower.json", p + "_upper.json");
+      c::with_storage(storage, [&](auto tag) {
+        c::load_n3p<typename decltype(tag)::type>(*w, p + "_signal.json", p + "_lower.json", p + "_upper.json");
+      });
     }
     *out = w.release();
     return SB_OK;
   }
   SB_CATCH_ALL(nullptr)
+}
+
+SPARSEBODY_API sb_status sb_weights_storage(const sb_weights* w, int32_t* storage) {
+  namespace c = sparsebody::capi;
+  if (!w) return c::fail(nullptr, SB_ERR_NULL, "sb_weights_storage: weights is NULL");
+  if (!c::live(w, c::kWeightsTag)) return c::fail(nullptr, SB_ERR_BAD_HANDLE, "sb_weights_storage: not a live sb_weights");
+  if (!storage) return c::fail(nullptr, SB_ERR_NULL, "sb_weights_storage: storage is NULL");
+  *storage = w->storage;
+  return SB_OK;
 }
 
 SPARSEBODY_API sb_status sb_weights_load_n3p(const char* upper, const char* lower, const char* signal, sb_weights** out) {
@@ -428,7 +505,7 @@ SPARSEBODY_API sb_status sb_weights_load_n3p(const char* upper, const char* lowe
   try {
     auto w = std::make_unique<sb_weights>();
     w->model = SB_MODEL_N3P;
-    c::load_n3p(*w, signal, lower, upper);
+    c::load_n3p<float>(*w, signal, lower, upper);
     *out = w.release();
     return SB_OK;
   }
@@ -482,9 +559,15 @@ SPARSEBODY_API sb_status sb_pipeline_create(const sb_weights* w, const sb_pipeli
     auto h = std::make_unique<sb_pipeline>();
     h->kind = kind;
     if (kind == SB_PIPELINE_LOBSTR) {
-      h->impl = std::make_unique<c::PipelineModel<c::LoBSTr>>(w->lobstr, c::lobstr_config(*cfg));
+      c::with_storage(w->storage, [&](auto tag) {
+        using W = typename decltype(tag)::type;
+        h->impl = std::make_unique<c::PipelineModel<typename c::Builds<W>::LoBSTr>>(c::lobstr_of<W>(*w), c::lobstr_config(*cfg));
+      });
     } else if (kind == SB_PIPELINE_N3P_DIRECT) {
-      h->impl = std::make_unique<c::PipelineModel<c::N3PDirect>>(w->n3p, c::n3p_config(*cfg));
+      c::with_storage(w->storage, [&](auto tag) {
+        using W = typename decltype(tag)::type;
+        h->impl = std::make_unique<c::PipelineModel<typename c::Builds<W>::N3PDirect>>(c::n3p_of<W>(*w), c::n3p_config(*cfg));
+      });
     } else if (kind == SB_PIPELINE_QUESTSIM) {
       a::QuestSimSessionConfig pc;  // contact_ik does not apply (a simulated body)
       pc.calibration.enabled = cfg->auto_calibration != 0;
@@ -493,7 +576,10 @@ SPARSEBODY_API sb_status sb_pipeline_create(const sb_weights* w, const sb_pipeli
       a::N3PPhysicsConfig pc;  // its direct pipeline's defaults differ from N3PConfig's: set the two flags only
       pc.direct.foot_ik = cfg->contact_ik != 0;
       pc.direct.calibration.enabled = cfg->auto_calibration != 0;
-      h->impl = std::make_unique<c::PipelineModel<c::N3PPhysics>>(w->n3p, pc);
+      c::with_storage(w->storage, [&](auto tag) {
+        using W = typename decltype(tag)::type;
+        h->impl = std::make_unique<c::PipelineModel<typename c::Builds<W>::N3PPhysics>>(c::n3p_of<W>(*w), pc);
+      });
     }
     *out = h.release();
     return SB_OK;
@@ -749,10 +835,15 @@ SPARSEBODY_API sb_status sb_crowd_create(const sb_weights* w, const sb_pipeline_
     auto h = std::make_unique<sb_crowd>();
     h->kind = kind;
     h->users = users;
-    if (kind == SB_PIPELINE_LOBSTR)
-      h->impl = std::make_unique<c::CrowdModel<c::LoBSTr, a::LoBSTrBatch<c::LoBSTr>>>(w->lobstr, users, c::lobstr_config(*cfg));
-    else
-      h->impl = std::make_unique<c::CrowdModel<c::N3PDirect, a::N3PBatch<c::N3PDirect>>>(w->n3p, users, c::n3p_config(*cfg));
+    c::with_storage(w->storage, [&](auto tag) {
+      using W = typename decltype(tag)::type;
+      using L = typename c::Builds<W>::LoBSTr;
+      using N = typename c::Builds<W>::N3PDirect;
+      if (kind == SB_PIPELINE_LOBSTR)
+        h->impl = std::make_unique<c::CrowdModel<L, a::LoBSTrBatch<L>>>(c::lobstr_of<W>(*w), users, c::lobstr_config(*cfg));
+      else
+        h->impl = std::make_unique<c::CrowdModel<N, a::N3PBatch<N>>>(c::n3p_of<W>(*w), users, c::n3p_config(*cfg));
+    });
     h->user = std::make_unique<sb_pipeline[]>(static_cast<std::size_t>(users));
     h->view = std::make_unique<c::PipelineBase*[]>(static_cast<std::size_t>(users));
     for (int i = 0; i < users; ++i) {
