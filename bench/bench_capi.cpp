@@ -7,6 +7,7 @@
 //                         medians over the iterations, which a noisy shared machine cannot skew;
 //   BM_Cpp/<pipeline>, BM_C/<pipeline>  each alone (Google Benchmark's own timing).
 // pipeline: 0 LoBSTr compact, 1 Neural3Points direct, 2 Neural3Points physics; float weights.
+//   BM_CInt8/<pipeline>   BM_C with int8 weights (sb_weights_load_storage, SB_STORAGE_INT8).
 // Input: a synthetic user walking a circle and waving, with a pelvis tracker (no data files).
 #include <benchmark/benchmark.h>
 
@@ -70,9 +71,13 @@ void copy_pose(const P& p, sb_quatf* rot, sb_vec3f* pos) {
 struct Fixture {
   sb_weights* lobstr = nullptr;
   sb_weights* n3p = nullptr;
+  sb_weights* lobstr_q8 = nullptr;
+  sb_weights* n3p_q8 = nullptr;
   Fixture() {
     sb_weights_load(SB_MODEL_LOBSTR, SPARSEBODY_LOBSTR_WEIGHTS, &lobstr);
     sb_weights_load(SB_MODEL_N3P, SPARSEBODY_N3P_WEIGHTS, &n3p);
+    sb_weights_load_storage(SB_MODEL_LOBSTR, SPARSEBODY_LOBSTR_WEIGHTS, SB_STORAGE_INT8, &lobstr_q8);
+    sb_weights_load_storage(SB_MODEL_N3P, SPARSEBODY_N3P_WEIGHTS, SB_STORAGE_INT8, &n3p_q8);
   }
 };
 const Fixture& fixture() {
@@ -80,11 +85,12 @@ const Fixture& fixture() {
   return f;
 }
 
-sb_pipeline* c_pipeline(int kind) {
+sb_pipeline* c_pipeline(int kind, bool int8 = false) {
   sb_pipeline_config c;
   sb_pipeline_config_init(&c, kind);
   sb_pipeline* p = nullptr;
-  sb_pipeline_create(kind == SB_PIPELINE_LOBSTR ? fixture().lobstr : fixture().n3p, &c, &p);
+  const Fixture& w = fixture();
+  sb_pipeline_create(kind == SB_PIPELINE_LOBSTR ? (int8 ? w.lobstr_q8 : w.lobstr) : (int8 ? w.n3p_q8 : w.n3p), &c, &p);
   return p;
 }
 
@@ -187,10 +193,14 @@ void BM_Cpp(benchmark::State& state) {
   });
 }
 
-void BM_C(benchmark::State& state) {
+void c_frames(benchmark::State& state, bool int8) {
   if (!ready(state)) return;
   const int kind = kind_of(state);
-  sb_pipeline* c = c_pipeline(kind);
+  sb_pipeline* c = c_pipeline(kind, int8);
+  if (!c) {
+    state.SkipWithError("no pipeline (int8 weights not loaded)");
+    return;
+  }
   int32_t n = 0;
   sb_pipeline_joint_count(c, &n);
   std::vector<sb_quatf> rot(static_cast<std::size_t>(n));
@@ -210,11 +220,14 @@ void BM_C(benchmark::State& state) {
   }
   sb_pipeline_destroy(c);
 }
+void BM_C(benchmark::State& state) { c_frames(state, false); }
+void BM_CInt8(benchmark::State& state) { c_frames(state, true); }
 
 }  // namespace
 
 BENCHMARK(BM_Paired)->DenseRange(0, 2)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Cpp)->DenseRange(0, 2)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_C)->DenseRange(0, 2)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CInt8)->DenseRange(0, 2)->Unit(benchmark::kMicrosecond);
 
 BENCHMARK_MAIN();
