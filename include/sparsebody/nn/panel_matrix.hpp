@@ -161,67 +161,34 @@ inline void gemv(const PanelMatrix<T, Wt>& W, const T* x, const T* bias, T* y) n
 // kFmaChains / K instances, so a weight comes from memory once per frame for all instances and
 // from cache once per tile.
 namespace detail {
-template <typename T, typename W, int NB, int NI>
+// R row batches (b .. b+R-1, R = 1 or 2) for NI instances. With R = 2 each instance's broadcast
+// x[i][j] feeds both batches, so a step of 2 weight loads and NI broadcasts does 2 NI FMAs (R = 1:
+// 1 + NI loads for NI). Same accumulators, column order and final sums as panel_gemv: bit for bit.
+template <typename T, typename W, int NB, int R, int NI>
 inline void panel_gemv_tile(const W* __restrict w, int cols, int b, const T* const* x, const T* bias, T* const* y,
                             int row0) noexcept {
   using B = Batch<T>;
   constexpr int L = kLanes<T>;
   constexpr int K = kFmaChains<T> / NB > 1 ? kFmaChains<T> / NB : 1;  // as panel_gemv
-  B acc[K][NI];
+  B acc[K][R][NI];
   for (int k = 0; k < K; ++k)
-    for (int i = 0; i < NI; ++i) acc[k][i] = B(T(0));
+    for (int r = 0; r < R; ++r)
+      for (int i = 0; i < NI; ++i) acc[k][r][i] = B(T(0));
   const W* wb = w + b * L;
-  int j = 0;
-  for (; j + K <= cols; j += K)
-    for (int k = 0; k < K; ++k) {
-      const B wv = load_weights<T, W>(wb + static_cast<std::size_t>(j + k) * NB * L);
-      for (int i = 0; i < NI; ++i) acc[k][i] = xsimd::fma(wv, B(x[i][j + k]), acc[k][i]);
-    }
-  for (; j < cols; ++j) {
-    const B wv = load_weights<T, W>(wb + static_cast<std::size_t>(j) * NB * L);
-    for (int i = 0; i < NI; ++i) acc[0][i] = xsimd::fma(wv, B(x[i][j]), acc[0][i]);
-  }
-  for (int i = 0; i < NI; ++i) {
-    B sum = bias ? B::load_aligned(bias + b * L) : B(T(0));
-    for (int k = 0; k < K; ++k) sum += acc[k][i];
-    sum.store_aligned(y[i] + row0 + b * L);
-  }
-}
-
-// Two row batches (b, b+1) at once for NI instances: each instance's broadcast x[i][j] feeds both,
-// so a step of 2 weight loads and NI broadcasts does 2 NI FMAs (the one-batch tile: 1 + NI loads
-// for NI). Same accumulators, column order and final sums as panel_gemv: bit for bit.
-template <typename T, typename W, int NB, int NI>
-inline void panel_gemv_tile2(const W* __restrict w, int cols, int b, const T* const* x, const T* bias, T* const* y,
-                             int row0) noexcept {
-  using B = Batch<T>;
-  constexpr int L = kLanes<T>;
-  constexpr int K = kFmaChains<T> / NB > 1 ? kFmaChains<T> / NB : 1;  // as panel_gemv
-  B acc[K][2][NI];
-  for (int k = 0; k < K; ++k)
-    for (int i = 0; i < NI; ++i) acc[k][0][i] = acc[k][1][i] = B(T(0));
-  const W* wb = w + b * L;
-  int j = 0;
-  for (; j + K <= cols; j += K)
-    for (int k = 0; k < K; ++k) {
-      const W* wj = wb + static_cast<std::size_t>(j + k) * NB * L;
-      const B w0 = load_weights<T, W>(wj), w1 = load_weights<T, W>(wj + L);
-      for (int i = 0; i < NI; ++i) {
-        const B xi(x[i][j + k]);
-        acc[k][0][i] = xsimd::fma(w0, xi, acc[k][0][i]);
-        acc[k][1][i] = xsimd::fma(w1, xi, acc[k][1][i]);
-      }
-    }
-  for (; j < cols; ++j) {
+  auto column = [&](int j, int k) {  // column j into accumulator set k
     const W* wj = wb + static_cast<std::size_t>(j) * NB * L;
-    const B w0 = load_weights<T, W>(wj), w1 = load_weights<T, W>(wj + L);
+    B wv[R];
+    for (int r = 0; r < R; ++r) wv[r] = load_weights<T, W>(wj + r * L);
     for (int i = 0; i < NI; ++i) {
       const B xi(x[i][j]);
-      acc[0][0][i] = xsimd::fma(w0, xi, acc[0][0][i]);
-      acc[0][1][i] = xsimd::fma(w1, xi, acc[0][1][i]);
+      for (int r = 0; r < R; ++r) acc[k][r][i] = xsimd::fma(wv[r], xi, acc[k][r][i]);
     }
-  }
-  for (int r = 0; r < 2; ++r)
+  };
+  int j = 0;
+  for (; j + K <= cols; j += K)
+    for (int k = 0; k < K; ++k) column(j + k, k);
+  for (; j < cols; ++j) column(j, 0);
+  for (int r = 0; r < R; ++r)
     for (int i = 0; i < NI; ++i) {
       B sum = bias ? B::load_aligned(bias + (b + r) * L) : B(T(0));
       for (int k = 0; k < K; ++k) sum += acc[k][r][i];
@@ -256,11 +223,11 @@ inline void panel_gemv_batch(const W* w, int cols, int n, const T* const* x, con
   if constexpr (kTwoBatchTiles && NB % 2 == 0 && NI2 >= 2) {
     i0 = n / NI2 * NI2;
     for (int b = 0; b < NB; b += 2)
-      for (int i = 0; i < i0; i += NI2) panel_gemv_tile2<T, W, NB, NI2>(w, cols, b, x + i, bias, y + i, row0);
+      for (int i = 0; i < i0; i += NI2) panel_gemv_tile<T, W, NB, 2, NI2>(w, cols, b, x + i, bias, y + i, row0);
   }
   const int tiled = NI > 1 ? i0 + (n - i0) / NI * NI : i0;
   for (int b = 0; b < NB; ++b)
-    for (int i = i0; i < tiled; i += NI) panel_gemv_tile<T, W, NB, NI>(w, cols, b, x + i, bias, y + i, row0);
+    for (int i = i0; i < tiled; i += NI) panel_gemv_tile<T, W, NB, 1, NI>(w, cols, b, x + i, bias, y + i, row0);
   // The instances left over (all of them when a tile would hold one): the single product, which
   // keeps all NB * K accumulators busy instead of K.
   for (int i = tiled; i < n; ++i) panel_gemv<T, W, NB>(w, cols, x[i], bias, y[i] + row0);
