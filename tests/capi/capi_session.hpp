@@ -26,6 +26,16 @@ inline std::vector<sparsebody::trackers::TrackerFrame> device_session(const std:
   return r::synthesize_device_trackers(clip, map, units, d).frames;
 }
 
+// The shipped weights (examples/weights under `dir`) of a LoBSTr or Neural3Points pipeline kind, in
+// `storage` (sb_storage); NULL when they do not load.
+inline sb_weights* shipped_weights(const std::string& dir, int kind, int storage) {
+  const bool lobstr = kind == SB_PIPELINE_LOBSTR;
+  const std::string path = dir + (lobstr ? "/lobstr_compact.weights.json" : "/n3p");
+  sb_weights* w = nullptr;
+  sb_weights_load_storage(lobstr ? SB_MODEL_LOBSTR : SB_MODEL_N3P, path.c_str(), storage, &w);
+  return w;
+}
+
 inline sb_tracker_frame to_c(const sparsebody::trackers::TrackerFrame& f) {
   sb_tracker_frame c{};
   c.struct_size = sizeof c;

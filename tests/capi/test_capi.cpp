@@ -472,8 +472,8 @@ void check_parity(P& cpp, int kind, int storage = SB_STORAGE_FLOAT) {
   if (storage == SB_STORAGE_FLOAT) {
     p = create(kind);
   } else {
-    const std::string path = kind == SB_PIPELINE_LOBSTR ? kWeights + "/lobstr_compact.weights.json" : kWeights + "/n3p";
-    REQUIRE(sb_weights_load_storage(kind == SB_PIPELINE_LOBSTR ? SB_MODEL_LOBSTR : SB_MODEL_N3P, path.c_str(), storage, &stored) == SB_OK);
+    stored = capi_test::shipped_weights(kWeights, kind, storage);
+    REQUIRE(stored);
     int32_t got = -1;
     REQUIRE(sb_weights_storage(stored, &got) == SB_OK);
     CHECK(got == storage);

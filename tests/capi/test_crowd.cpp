@@ -23,10 +23,8 @@ sb_weights* weights(int kind) {
   static sb_weights* lobstr = nullptr;
   static sb_weights* n3p = nullptr;
   sb_weights*& w = kind == SB_PIPELINE_LOBSTR ? lobstr : n3p;
-  if (!w) {
-    const std::string path = kind == SB_PIPELINE_LOBSTR ? kWeights + "/lobstr_compact.weights.json" : kWeights + "/n3p";
-    REQUIRE(sb_weights_load(kind == SB_PIPELINE_LOBSTR ? SB_MODEL_LOBSTR : SB_MODEL_N3P, path.c_str(), &w) == SB_OK);
-  }
+  if (!w) w = capi_test::shipped_weights(kWeights, kind, SB_STORAGE_FLOAT);
+  REQUIRE(w);
   return w;
 }
 
@@ -62,8 +60,8 @@ void check_crowd_equals_pipelines(int kind, int storage = SB_STORAGE_FLOAT) {
   sb_weights* w = weights(kind);
   sb_weights* stored = nullptr;
   if (storage != SB_STORAGE_FLOAT) {
-    const std::string path = kind == SB_PIPELINE_LOBSTR ? kWeights + "/lobstr_compact.weights.json" : kWeights + "/n3p";
-    REQUIRE(sb_weights_load_storage(kind == SB_PIPELINE_LOBSTR ? SB_MODEL_LOBSTR : SB_MODEL_N3P, path.c_str(), storage, &stored) == SB_OK);
+    stored = capi_test::shipped_weights(kWeights, kind, storage);
+    REQUIRE(stored);
     w = stored;
   }
   sb_crowd* crowd = nullptr;
