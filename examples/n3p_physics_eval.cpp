@@ -17,14 +17,17 @@
 //     [--feedforward SCALE] [--correction-kp X] [--target-lead FRAMES] [--hold-targets 0|1] [--contact-passes N]
 //     [--stance-support 0|1] [--support-moment 0|1] [--support-on-contact 0|1]
 //     [--velocity-targets 0|1] [--acceleration SCALE] [--ground-reference 0|1] [--ground-resets 0|1]
+//     [--correction FILE]
 // (each overrides one field of N3PPhysicsConfig / ModelBasedControllerConfig; the README's table of
-// the default with each part turned off is made with them).
+// the default with each part turned off is made with them). --correction adds a learned correction
+// of the PD targets (N3PPhysicsPipeline::set_correction_policy; weights_tool.questsim.train --task n3p).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -44,6 +47,7 @@ struct Options {
   std::string prefix = SPARSEBODY_N3P_WEIGHTS;
   int max_clips = 1 << 30, every = 1;
   bool shift = true;
+  std::string correction;
   avatar::N3PPhysicsConfig cfg;
 };
 
@@ -95,6 +99,7 @@ Options parse_options(int argc, char** argv) {
     if (num("--every", count)) { o.every = std::max(1, static_cast<int>(count)); continue; }
     if (!std::strcmp(argv[i], "--no-shift")) o.shift = false;
     else if (!std::strcmp(argv[i], "--weights") && i + 1 < argc) o.prefix = argv[++i];
+    else if (!std::strcmp(argv[i], "--correction") && i + 1 < argc) o.correction = argv[++i];
     else {
       std::fprintf(stderr, "n3p_physics_eval: unknown option '%s' (the flags are listed at the top of examples/n3p_physics_eval.cpp)\n", argv[i]);
       std::exit(2);
@@ -229,9 +234,10 @@ struct Totals {
 
 // One clip through a fresh physics pipeline: direct and physics output scored, the physics
 // counters added to the totals.
-void evaluate_clip(const nlohmann::json& c, const Physics::Weights& w, const Options& o, const Dump& dump,
-                   const FootJoints& feet, Totals& tot) {
+void evaluate_clip(const nlohmann::json& c, const Physics::Weights& w, const std::shared_ptr<const Physics::CorrectionWeights>& cw,
+                   const Options& o, const Dump& dump, const FootJoints& feet, Totals& tot) {
   Physics p(w, o.cfg);
+  p.set_correction_policy(cw);
   p.set_calibration({});  // the dumped trackers are the joints in the body convention (training data)
   const int F = static_cast<int>(c["p"].size());
   ClipScorer direct(c, dump, feet, p.skeleton(), tot.direct), physics(c, dump, feet, p.skeleton(), tot.physics);
@@ -255,15 +261,17 @@ void evaluate_clip(const nlohmann::json& c, const Physics::Weights& w, const Opt
 }
 
 void print_summary(const Totals& tot, const Options& o) {
-  std::printf("Neural3Points, %ld validation clips (every %d-th), 3-point input, physics output %s\n", tot.clips, o.every,
-              o.shift ? "shifted by its 0.1 s delay" : "not shifted");
+  std::printf("Neural3Points, %ld validation clips (every %d-th), 3-point input, physics output %s%s%s\n", tot.clips, o.every,
+              o.shift ? "shifted by its 0.1 s delay" : "not shifted", o.correction.empty() ? "" : ", target correction ",
+              o.correction.c_str());
   tot.direct.print("direct");
   tot.physics.print("physics");
   const auto& rs = tot.residual;
   std::printf("physics: residual root force mean %.1f N, max %.1f N; torque mean %.1f N m, max %.1f N m (%lld steps); "
-              "falls %ld (height %ld, tilt %ld, diverged %ld), failed steps %ld; simulated body below floor mean %.2f mm, max %.1f mm\n",
+              "falls %ld (height %ld, tilt %ld, diverged %ld; %.2f per minute of output), failed steps %ld; simulated body below floor mean %.2f mm, max %.1f mm\n",
               rs.force_mean(), rs.force_max, rs.torque_mean(), rs.torque_max, rs.steps, tot.falls, tot.by[1], tot.by[2], tot.by[3],
-              tot.failures, 1000 * tot.sim_pen / std::max(1L, tot.sim_n), 1000 * tot.sim_pen_max);
+              tot.falls / std::max(1e-9, tot.physics.n / 30.0 / 60.0), tot.failures, 1000 * tot.sim_pen / std::max(1L, tot.sim_n),
+              1000 * tot.sim_pen_max);
 }
 
 }  // namespace
@@ -272,6 +280,15 @@ int main(int argc, char** argv) {
   const Options o = parse_options(argc, argv);
   const Dump dump = load_dump(o.file);
   const auto w = load_weights(o.prefix);
+  std::shared_ptr<const Physics::CorrectionWeights> cw;
+  if (!o.correction.empty()) {
+    try {
+      cw = Physics::load_correction(o.correction);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "n3p_physics_eval: %s\n", e.what());
+      return 2;
+    }
+  }
   const FootJoints feet = foot_joints(Physics(w, o.cfg), dump.toes);
   Totals tot;
   int idx = -1;
@@ -279,7 +296,7 @@ int main(int argc, char** argv) {
     if (++idx % o.every != 0) continue;
     if (tot.clips >= o.max_clips) break;
     ++tot.clips;
-    evaluate_clip(c, w, o, dump, feet, tot);
+    evaluate_clip(c, w, cw, o, dump, feet, tot);
   }
   print_summary(tot, o);
   return 0;

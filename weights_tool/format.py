@@ -7,7 +7,7 @@ import numpy as np
 from . import FORMAT, VERSION
 
 KNOWN_KINDS = ("mlp", "gru", "sequential", "lobstr", "n3p_signal", "n3p_lower", "n3p_upper",
-               "n3p_policy", "questsim_policy")
+               "n3p_policy", "n3p_correction_policy", "questsim_policy")
 
 
 def _as_numpy(t):

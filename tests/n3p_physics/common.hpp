@@ -2,7 +2,11 @@
 // besides the default weights).
 #pragma once
 #include <cmath>
+#include <fstream>
 #include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "sparsebody/avatar/n3p_physics.hpp"
 
@@ -44,6 +48,27 @@ bool finite_output(const P& p) {
   for (std::size_t j = 0; j < p.pose().local.size(); ++j)
     ok &= p.pose().local[j].coeffs().allFinite() && p.world().position[j].allFinite();
   return ok;
+}
+
+// A correction policy (kind "n3p_correction_policy", 1008-256-256-48 tanh) written to `path`: every
+// weight zero and every output bias `bias` (so each output is tanh(bias)), meta.action_scale `scale`
+// (omitted when negative). A test double of what weights_tool.questsim.train --task n3p exports.
+inline std::string write_correction_policy(const std::string& path, double bias, double scale) {
+  const int sizes[4] = {1008, 256, 256, 48};
+  nlohmann::json d;
+  d["format"] = "sparsebody-weights";
+  d["version"] = 1;
+  d["kind"] = "n3p_correction_policy";
+  d["meta"] = {{"input_size", 1008}, {"output_size", 48}, {"frame_rate", 30}};
+  if (scale >= 0) d["meta"]["action_scale"] = scale;
+  for (int l = 0; l < 3; ++l) {
+    const std::string n = "layers." + std::to_string(l);
+    d["tensors"][n + ".weight"] = {{"shape", {sizes[l + 1], sizes[l]}},
+                                   {"data", std::vector<double>(std::size_t(sizes[l + 1]) * sizes[l], 0.0)}};
+    d["tensors"][n + ".bias"] = {{"shape", {sizes[l + 1]}}, {"data", std::vector<double>(sizes[l + 1], l == 2 ? bias : 0.0)}};
+  }
+  std::ofstream(path) << d.dump();
+  return path;
 }
 
 }  // namespace n3p_physics_test

@@ -11,12 +11,17 @@
 
 using namespace sparsebody;
 
-TEST_CASE("n3p physics: no allocation per frame") {
+TEST_CASE("n3p physics: no allocation per frame (with and without a target correction)") {
   using n3p_physics_test::Physics;
-  for (int falls = 0; falls < 2; ++falls) {
+  const auto correction = Physics::load_correction(
+      n3p_physics_test::write_correction_policy(std::string(SPARSEBODY_TEST_TMP) + "/alloc_correction.json", 0.3, 0.2));
+  for (int run = 0; run < 4; ++run) {
+    const int falls = run % 2;
+    CAPTURE(run);
     avatar::N3PPhysicsConfig c;
     if (falls) c.fall.min_height = 5.0;  // every frame resets the character
     Physics p(n3p_physics_test::weights(), c);
+    if (run >= 2) p.set_correction_policy(correction);
     p.set_calibration({});  // synthetic users: trackers at the joints, body convention
     std::vector<trackers::TrackerFrame> frames;
     for (int t = 0; t < 240; ++t) frames.push_back(n3p_physics_test::user_frame(t, 1.0));
@@ -38,6 +43,7 @@ TEST_CASE("n3p physics: no allocation per frame") {
     CHECK(n == 0);
     CHECK(p.has_output());
     if (falls) CHECK(p.falls() > 100);
+    if (run >= 2) CHECK(p.corrections() > 100);
   }
 }
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "sparsebody/predict/n3p_predictor.hpp"
+#include "sparsebody/training/n3p_env.hpp"
 #include "sparsebody/training/questsim_env.hpp"
 
 namespace py = pybind11;
@@ -26,13 +27,13 @@ struct Clips {
 
 // The standard skeleton and standing heights come from the Neural3Points lower-body weights' meta
 // (the same retarget the physics pipeline uses).
-std::shared_ptr<Clips> load_clips(const std::vector<std::string>& paths, const std::string& n3p_lower) {
+std::shared_ptr<Clips> load_clips(const std::vector<std::string>& paths, const std::string& n3p_lower, double rate) {
   using Lo = predict::N3PPredictor<float>::LoNet;
   auto c = std::make_shared<Clips>();
   c->meta = predict::N3PMeta::from(nn::NetworkWeights<Lo>::load(n3p_lower, networks::kN3PLowerKind)->info());
   {
     py::gil_scoped_release nogil;
-    for (const auto& p : paths) c->clips->push_back(training::read_questsim_reference(p, c->meta.skeleton));
+    for (const auto& p : paths) c->clips->push_back(training::read_questsim_reference(p, c->meta.skeleton, rate));
   }
   return c;
 }
@@ -50,8 +51,8 @@ PYBIND11_MODULE(_questsim_env, m) {
       .def("__len__", [](const Clips& c) { return c.clips->size(); })
       .def("frames", [](const Clips& c, int i) { return c.clips->at(std::size_t(i)).frames(); })
       .def("source", [](const Clips& c, int i) { return c.clips->at(std::size_t(i)).source; });
-  m.def("load_clips", &load_clips, py::arg("paths"), py::arg("n3p_lower"),
-        "BVH clips -> reference motions at 36 Hz (poses and device-stream sensors)");
+  m.def("load_clips", &load_clips, py::arg("paths"), py::arg("n3p_lower"), py::arg("rate") = 36.0,
+        "BVH clips -> reference motions at `rate` Hz (poses and device-stream sensors): 36 for QuestSim, 30 for N3PEnv");
 
   py::class_<training::QuestSimEnvConfig>(m, "Config")
       .def(py::init<>())
@@ -156,5 +157,77 @@ PYBIND11_MODULE(_questsim_env, m) {
         for (int b = 0; b < e.model(i).nb; ++b)
           for (int k = 0; k < 3; ++k) r(b, k) = double(d.p[b](k));
         return out;
+      });
+  // Neural3Points correction-policy environment (include/sparsebody/training/n3p_env.hpp).
+  py::class_<training::N3PEnvConfig>(m, "N3PConfig")
+      .def(py::init<>())
+      .def_readwrite("action_scale", &training::N3PEnvConfig::action_scale)
+      .def_readwrite("max_episode_steps", &training::N3PEnvConfig::max_episode_steps)
+      .def_readwrite("rest_start", &training::N3PEnvConfig::rest_start)
+      .def_readwrite("contact_height", &training::N3PEnvConfig::contact_height)
+      .def_readwrite("residual_weight", &training::N3PEnvConfig::residual_weight)
+      .def_property("max_force", [](const training::N3PEnvConfig& c) { return c.controller.max_force; },
+                    [](training::N3PEnvConfig& c, double v) { c.controller.max_force = v; })
+      .def_property("max_torque", [](const training::N3PEnvConfig& c) { return c.controller.max_torque; },
+                    [](training::N3PEnvConfig& c, double v) { c.controller.max_torque = v; });
+
+  using NEnv = training::N3PEnv;
+  py::class_<NEnv>(m, "N3PEnv")
+      .def(py::init([](std::shared_ptr<Clips> c, int characters, unsigned long long seed, training::N3PEnvConfig cfg) {
+             return std::make_unique<NEnv>(c->clips, c->meta, characters, seed, cfg);
+           }),
+           py::arg("clips"), py::arg("characters"), py::arg("seed") = 0, py::arg("config") = training::N3PEnvConfig{})
+      .def_property_readonly_static("obs_size", [](py::object) { return NEnv::kObservationSize; })
+      .def_property_readonly_static("action_size", [](py::object) { return NEnv::kActionSize; })
+      .def("__len__", &NEnv::size)
+      .def_property_readonly("obs", [](py::object self) {
+        NEnv& e = self.cast<NEnv&>();
+        return view(self, e.observations(), {e.size(), NEnv::kObservationSize});
+      })
+      .def_property_readonly("final_obs", [](py::object self) {
+        NEnv& e = self.cast<NEnv&>();
+        return view(self, const_cast<float*>(e.final_observations()), {e.size(), NEnv::kObservationSize});
+      })
+      .def_property_readonly("reward", [](py::object self) {
+        NEnv& e = self.cast<NEnv&>();
+        return view(self, const_cast<float*>(e.rewards()), {e.size()});
+      })
+      .def_property_readonly("reward_terms", [](py::object self) {
+        NEnv& e = self.cast<NEnv&>();
+        return view(self, const_cast<float*>(e.reward_terms()), {e.size(), 6});
+      })
+      .def_property_readonly("terminated", [](py::object self) {
+        NEnv& e = self.cast<NEnv&>();
+        return view(self, const_cast<unsigned char*>(e.terminated()), {e.size()});
+      })
+      .def_property_readonly("truncated", [](py::object self) {
+        NEnv& e = self.cast<NEnv&>();
+        return view(self, const_cast<unsigned char*>(e.truncated()), {e.size()});
+      })
+      .def("step", [](NEnv& e, py::array_t<float, py::array::c_style> a, int threads) {
+        if (a.ndim() != 2 || a.shape(0) != e.size() || a.shape(1) != NEnv::kActionSize)
+          throw py::value_error("actions: expected float32 [" + std::to_string(e.size()) + ", " +
+                                std::to_string(NEnv::kActionSize) + "]");
+        const float* p = a.data();
+        py::gil_scoped_release nogil;
+        e.step(p, threads);
+      }, py::arg("actions"), py::arg("threads") = 1)
+      .def("reset_all", &NEnv::reset_all)
+      .def("set_residual", &NEnv::set_residual, py::arg("max_force"), py::arg("max_torque"))
+      .def("clip", &NEnv::clip)
+      .def("frame", &NEnv::frame)
+      .def("episode_step", &NEnv::episode_step)
+      .def("residual_force", &NEnv::residual_force)
+      .def("q", [](const NEnv& e, int i) {
+        const auto& q = e.simulator(i).q();
+        return std::vector<double>(q.data(), q.data() + q.size());
+      })
+      .def("reference_q", [](const NEnv& e, int i) {
+        const auto& q = e.reference_q(i);
+        return std::vector<double>(q.data(), q.data() + q.size());
+      })
+      .def("targets", [](const NEnv& e, int i) {
+        const auto& q = e.targets(i);
+        return std::vector<double>(q.data(), q.data() + q.size());
       });
 }

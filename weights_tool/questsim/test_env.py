@@ -99,3 +99,52 @@ def test_trainer_runs_one_update_resumes_and_exports(clip_paths, tmp_path):
     s = json.load(open(out))["summary"]
     assert s["clips"] == 3 and np.isfinite(s["mpjpe_cm"]) and s["mpjpe_cm"] > 0 and s["residual_N"] == 0
     assert s["mpjpe_cm"] <= s["mpjpe_output_cm"] + 5  # removing the latency does not make it much worse
+
+
+@pytest.fixture(scope="module")
+def clips30(clip_paths):
+    return qe.load_clips(clip_paths, N3P_LOWER, 30.0)
+
+
+def test_n3p_env_views_determinism_and_bad_input(clips30, clips):
+    env = qe.N3PEnv(clips30, 4, 2)
+    obs = env.obs
+    assert obs.shape == (4, qe.N3PEnv.obs_size) == (4, 1008) and qe.N3PEnv.action_size == 48
+    assert env.reward_terms.shape == (4, 6)
+    before = obs.copy()
+    env.step(np.zeros((4, 48), np.float32))
+    assert not np.array_equal(before, obs) and np.all(np.isfinite(obs))
+    assert np.all(env.reward >= 0) and np.all(env.reward <= 1.2 + 1e-6)
+    a, b = qe.N3PEnv(clips30, 6, 3), qe.N3PEnv(clips30, 6, 3)
+    rng = np.random.default_rng(1)
+    for _ in range(30):
+        u = (0.3 * rng.standard_normal((6, 48))).astype(np.float32)
+        a.step(u, 1)
+        b.step(u, 2)
+        assert np.array_equal(a.obs, b.obs) and np.array_equal(a.reward, b.reward)
+    with pytest.raises(ValueError, match=r"actions: expected float32 \[6, 48\]"):
+        a.step(np.zeros((6, 47), np.float32))
+    with pytest.raises(Exception, match="30 Hz"):
+        qe.N3PEnv(clips, 2, 0)  # the QuestSim clips are at 36 Hz
+    a.set_residual(0, 0)
+    a.step(np.zeros((6, 48), np.float32))
+    assert all(a.residual_force(i) == 0 for i in range(6))
+
+
+def test_n3p_trainer_runs_resumes_and_exports(clip_paths, tmp_path):
+    from . import train
+    from ..format import read_weights
+    d = os.path.dirname(clip_paths[0])
+    args = [d, "--task", "n3p", "--out", str(tmp_path), "--envs", "8", "--horizon", "8", "--samples", "640",
+            "--motions", ".", "--residual-force", "620", "--residual-torque", "250", "--residual-anneal", "1280"]
+    train.main(args)
+    assert len(open(tmp_path / "curve.csv").read().splitlines()) == 11
+    doc, tensors, norm = read_weights(str(tmp_path / "n3p_correction_policy.json"))
+    assert doc["kind"] == "n3p_correction_policy" and doc["meta"]["action_scale"] == 0.2
+    assert tensors["layers.0.weight"].shape == (256, 1008) and tensors["layers.2.weight"].shape == (48, 256)
+    assert norm["input_mean"].shape == (1008,)
+    train.main(args[:9] + ["--samples", "1280"] + args[11:] + ["--resume"])
+    rows = open(tmp_path / "curve.csv").read().splitlines()
+    assert len(rows) == 21 and float(rows[-1].split(",")[11]) < 620  # continued; the residual bound annealed
+    with pytest.raises(SystemExit, match="no DAgger"):
+        train.main(args + ["--bc-iters", "2"])

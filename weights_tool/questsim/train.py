@@ -18,6 +18,14 @@ wrench, questsim_env.hpp; --expert-wn, --expert-support-height): each step a
 character executes the expert's action with probability beta (1 -> 0 over the K updates), else the
 policy's sample; the policy regresses the expert's action on every visited observation, the value
 function learns the returns as in PPO. PPO follows.
+--task n3p trains the Neural3Points correction policy instead (issue 14 item 4, the issue's fallback to
+the paper's full policy): the environment is include/sparsebody/training/n3p_env.hpp (the physics
+mode's avatar and model-based controller; the policy adds a correction of at most --action-scale rad
+to each PD target every 30 Hz frame; observation s = {x_t, g_t+1..3}, 1008 values), the networks
+[256, 256] tanh (the paper's policy width), the export OUT/n3p_correction_policy.json (kind
+"n3p_correction_policy"); --residual-force / --residual-torque start the controller's residual wrench
+bound (the pipeline's default is 620 N / 250 N m) and anneal it to zero. DAgger, heights and neutral
+starts are QuestSim's only.
 Everything is resumable: OUT/checkpoint.pt (policy, value, optimiser, observation statistics,
 iteration, random state), OUT/curve.csv (one row per update), OUT/curve.png, and the policy in the
 library's format OUT/questsim_policy.json (kind "questsim_policy", normalisation = the running
@@ -75,11 +83,14 @@ class RunningStats:
         self.n, self.mean, self.m2 = s["n"], s["mean"], s["m2"]
 
 
+N3P_HIDDEN = (256, 256)  # the paper's policy width (§5)
+
+
 class ActorCritic(tnn.Module):
-    def __init__(self, n_obs, n_act, init_std):
+    def __init__(self, n_obs, n_act, init_std, hidden=HIDDEN, kind="questsim_policy"):
         super().__init__()
-        self.actor = nets.MLPPolicy([n_obs, *HIDDEN, n_act], "tanh", "tanh", "questsim_policy")
-        self.critic = nets.MLPPolicy([n_obs, *HIDDEN, 1], "tanh", "identity", "value")
+        self.actor = nets.MLPPolicy([n_obs, *hidden, n_act], "tanh", "tanh", kind)
+        self.critic = nets.MLPPolicy([n_obs, *hidden, 1], "tanh", "identity", "value")
         with torch.no_grad():  # small first actions (a few N m), as PPO implementations start
             self.actor.layers[-1].weight.mul_(0.01)
             self.actor.layers[-1].bias.zero_()
@@ -115,6 +126,16 @@ def export(path, model, stats, n_obs, n_act, info):
             "non_commercial": NON_COMMERCIAL, **info}
     write_weights(path, nets.export_state_dict(model.actor), "questsim_policy", n_obs, n_act, meta=meta,
                   normalization={"input_mean": mean, "input_std": std})
+
+
+def export_n3p(path, model, stats, n_obs, n_act, info):
+    meta = {"frame_rate": 30, "paper": "Neural3Points (Ye et al. 2022) physics mode: a correction of the model-based "
+            "controller's PD targets (issue 14 item 4 fallback)", "random_weights": False, "trained": True,
+            "joint_dofs": n_act, "input": "s = {x_t, g_t+1, g_t+2, g_t+3} (control/n3p_policy_input.hpp)",
+            "output": "tanh in [-1, 1], times action_scale (rad) = the correction of each joint DoF's PD target",
+            "credit": CREDIT, "license": "CC BY-NC 4.0", "non_commercial": NON_COMMERCIAL, **info}
+    write_weights(path, nets.export_state_dict(model.actor), "n3p_correction_policy", n_obs, n_act, meta=meta,
+                  normalization={"input_mean": stats.mean.astype(np.float32), "input_std": stats.std(0.05).astype(np.float32)})
 
 
 def init_from_json(path, model, stats, n_obs, n_act):
@@ -200,27 +221,42 @@ def main(argv=None):
     ap.add_argument("--env-threads", type=int, default=1)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--n3p-lower", default=os.path.join(ROOT, "examples/weights/n3p_lower.json"))
+    ap.add_argument("--task", choices=("questsim", "n3p"), default="questsim",
+                    help="questsim: the torque policy; n3p: the Neural3Points correction policy (n3p_env.hpp)")
+    ap.add_argument("--action-scale", type=float, default=0.2, help="n3p: rad of PD-target correction per unit action")
+    ap.add_argument("--residual-weight", type=float, default=0.2,
+                    help="n3p: reward weight of exp(-|residual force| / body weight)")
     a = ap.parse_args(argv)
+    n3p = a.task == "n3p"
+    if n3p and (a.bc_iters or a.init_json):
+        raise SystemExit("--task n3p: no DAgger (--bc-iters) and no --init-json")
     torch.set_num_threads(a.threads)
     torch.manual_seed(a.seed)
     os.makedirs(a.out, exist_ok=True)
     qe = load_module()
     paths = pick_clips(a.train_dir, a.motions, a.clips)
-    clips = qe.load_clips(paths, a.n3p_lower)
-    cfg = qe.Config()
-    cfg.joint_armature = a.armature
-    cfg.neutral_start = a.neutral_start
-    cfg.max_head_error = a.max_head_error
-    cfg.expert = a.bc_iters > 0  # the privileged expert costs two RNEAs per step: only for DAgger
-    cfg.expert_wn = a.expert_wn
-    cfg.expert_support = a.expert_support_height > 0
-    cfg.expert_support_height = max(a.expert_support_height, 1e-6)
-    if not (0.5 < a.heights[0] <= a.heights[1] < 3.0):
-        raise SystemExit(f"--heights {a.heights[0]} {a.heights[1]}: expected 0.5 < LO <= HI < 3 (m)")
-    heights = np.linspace(a.heights[0], a.heights[1], a.envs)
-    env = qe.Env(clips, [float(h) for h in np.random.default_rng(a.seed).permutation(heights)], a.seed, cfg)
-    n_obs, n_act = qe.Env.obs_size, qe.Env.action_size
-    model = ActorCritic(n_obs, n_act, a.init_std)
+    clips = qe.load_clips(paths, a.n3p_lower, 30.0 if n3p else 36.0)
+    cfg = qe.N3PConfig() if n3p else qe.Config()
+    if n3p:
+        cfg.action_scale = a.action_scale
+        cfg.residual_weight = a.residual_weight
+        env = qe.N3PEnv(clips, a.envs, a.seed, cfg)
+        n_obs, n_act = qe.N3PEnv.obs_size, qe.N3PEnv.action_size
+        model = ActorCritic(n_obs, n_act, a.init_std, N3P_HIDDEN, "n3p_correction_policy")
+    else:
+        cfg.joint_armature = a.armature
+        cfg.neutral_start = a.neutral_start
+        cfg.max_head_error = a.max_head_error
+        cfg.expert = a.bc_iters > 0  # the privileged expert costs two RNEAs per step: only for DAgger
+        cfg.expert_wn = a.expert_wn
+        cfg.expert_support = a.expert_support_height > 0
+        cfg.expert_support_height = max(a.expert_support_height, 1e-6)
+        if not (0.5 < a.heights[0] <= a.heights[1] < 3.0):
+            raise SystemExit(f"--heights {a.heights[0]} {a.heights[1]}: expected 0.5 < LO <= HI < 3 (m)")
+        heights = np.linspace(a.heights[0], a.heights[1], a.envs)
+        env = qe.Env(clips, [float(h) for h in np.random.default_rng(a.seed).permutation(heights)], a.seed, cfg)
+        n_obs, n_act = qe.Env.obs_size, qe.Env.action_size
+        model = ActorCritic(n_obs, n_act, a.init_std)
     opt = torch.optim.Adam(model.parameters(), lr=a.lr)
     stats = RunningStats(n_obs)
     it, samples = 0, 0
@@ -242,8 +278,8 @@ def main(argv=None):
     if not (a.resume and os.path.exists(curve)):
         with open(curve, "w", newline="") as f:
             csv.writer(f).writerow(fields)
-    print(f"{len(paths)} clips ({a.motions}), {a.envs} characters of {a.heights[0]:.2f}-{a.heights[1]:.2f} m, obs {n_obs}, "
-          f"actions {n_act}", flush=True)
+    print(f"{a.task}: {len(paths)} clips ({a.motions}), {a.envs} characters"
+          f"{'' if n3p else f' of {a.heights[0]:.2f}-{a.heights[1]:.2f} m'}, obs {n_obs}, actions {n_act}", flush=True)
     t_start = time.time()
     N, T = a.envs, a.horizon
     ep_len = np.zeros(N)
@@ -253,9 +289,10 @@ def main(argv=None):
         env.set_residual(res_f, res_t)
         mean_t = torch.tensor(stats.mean, dtype=torch.float32) if stats.n else torch.zeros(n_obs)
         std_np = stats.std(0.05) if stats.n else np.ones(n_obs)
-        std_np[-1] = 1.0
+        if not n3p:  # o_user,scale: the user's height varies at run time, not in training
+            std_np[-1] = 1.0
         std_t = torch.tensor(std_np, dtype=torch.float32)
-        if stats.n:
+        if stats.n and not n3p:
             mean_t[-1] = 1.75
         norm = lambda x: (torch.from_numpy(np.asarray(x, np.float32)) - mean_t) / std_t
         obs = np.zeros((T, N, n_obs), np.float32)
@@ -297,8 +334,8 @@ def main(argv=None):
                 done[t] = np.maximum(env.terminated, env.truncated)
                 if tr.any():
                     trunc_v[t, tr] = model.value(norm(env.final_obs[tr])).numpy()
-                terms += env.reward_terms.mean(0)
-                used += float(np.mean([env.residual_force(i) for i in range(0, N, 8)]))
+                terms += env.reward_terms[:, :5].mean(0)
+                used += float(env.reward_terms[:, 5].mean()) if n3p else float(np.mean([env.residual_force(i) for i in range(0, N, 8)]))
                 ep_len += 1
                 for i in np.nonzero(done[t])[0]:
                     lens.append(ep_len[i]); ep_len[i] = 0
@@ -353,9 +390,14 @@ def main(argv=None):
             torch.save({"model": model.state_dict(), "opt": opt.state_dict(), "stats": stats.state(), "iteration": it,
                         "samples": samples, "torch_rng": torch.get_rng_state(), "args": vars(a)}, ckpt + ".tmp")
             os.replace(ckpt + ".tmp", ckpt)
-            export(os.path.join(a.out, "questsim_policy.json"), model, stats, n_obs, n_act,
-                   {"samples": samples, "iterations": it, "motions": a.motions, "clips": len(paths),
-                    "residual_at_export": res_f, "joint_armature": a.armature, "heights_m": list(a.heights)})
+            if n3p:
+                export_n3p(os.path.join(a.out, "n3p_correction_policy.json"), model, stats, n_obs, n_act,
+                           {"samples": samples, "iterations": it, "motions": a.motions, "clips": len(paths),
+                            "residual_at_export": [res_f, res_t], "action_scale": a.action_scale})
+            else:
+                export(os.path.join(a.out, "questsim_policy.json"), model, stats, n_obs, n_act,
+                       {"samples": samples, "iterations": it, "motions": a.motions, "clips": len(paths),
+                        "residual_at_export": res_f, "joint_armature": a.armature, "heights_m": list(a.heights)})
             plot(curve, os.path.join(a.out, "curve.png"))
 
 

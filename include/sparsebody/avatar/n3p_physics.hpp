@@ -14,7 +14,8 @@
 //            plus per frame velocity targets qd_ref, an inverse-dynamics feed-forward carried by
 //            the stance legs and a bounded residual wrench on the root
 //            (control/model_based_controller.hpp; its magnitude is reported every step:
-//            residual(), residual_stats());
+//            residual(), residual_stats()); optionally a learned correction of the per-frame
+//            targets (set_correction_policy, control/n3p_target_correction.hpp);
 //     -> per substep: controller torques + tracker position correction (§6.2, Eq. (19),
 //        control/tracker_correction.hpp) -> Simulator::step(1/120)
 //     -> once per frame: fall detection (§9, control/fall_detector.hpp) -> reset to the reference
@@ -57,6 +58,7 @@
 #include "sparsebody/control/n3p_control_predictor.hpp"
 #include "sparsebody/control/n3p_recovery.hpp"
 #include "sparsebody/control/n3p_sim_retarget.hpp"
+#include "sparsebody/control/n3p_target_correction.hpp"
 #include "sparsebody/control/residual_wrench.hpp"
 #include "sparsebody/control/tracker_correction.hpp"
 #include "sparsebody/dynamics/simulator.hpp"
@@ -78,6 +80,8 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
   using Sim = dynamics::Simulator<S, MB, MD>;
   using ControlPredictor = control::N3PControlPredictor<T, HSig, HLo, HUp, S, MB, MD, W>;
   using PolicyWeights = typename ControlPredictor::PolicyWeights;
+  using Correction = control::N3PTargetCorrection<T, S, MB, MD, character::kDefaultAvatarJointDofs, W>;
+  using CorrectionWeights = typename Correction::Weights;
   static constexpr int kDelayFrames = 3;    // 0.1 s at 30 Hz (see the header comment)
   static constexpr int kControlPeriod = 3;  // frames per control step (10 Hz)
   static constexpr int kHistory = 8;        // reference frames kept (ring)
@@ -107,6 +111,18 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
     this->start_front_end(direct_.meta().frame_rate, cfg.direct.sanitizer, direct_.skeleton().size());
     reset();
   }
+
+  // A learned correction of the model-based controller's per-frame PD targets (issue 14 item 4:
+  // weights_tool.questsim.train --task n3p exports it; load with load_correction). nullptr removes
+  // it. Used with ControllerKind::ModelBased and per_frame_targets (the defaults) only. Allocates
+  // (the network's buffers): call it at set-up, not per frame. Throws std::invalid_argument if the
+  // policy's joint DoFs differ from the avatar's.
+  static std::shared_ptr<const CorrectionWeights> load_correction(const std::string& path) { return Correction::load(path); }
+  void set_correction_policy(std::shared_ptr<const CorrectionWeights> w) {
+    correction_policy_ = w ? std::make_unique<Correction>(std::move(w), model_) : nullptr;
+  }
+  const Correction* correction_policy() const noexcept { return correction_policy_.get(); }
+  long long corrections() const noexcept { return corrections_; }  // frames whose targets the correction set
 
   // --- calibration (§7), as direct mode (automatic by default) ---------------------------------
   // A calibration change (automatic or explicit) restarts the physics at the next frame: the
@@ -239,7 +255,14 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
     if (cfg_.controller.support_on_contact)  // stance support only for a foot the simulated character stands on
       for (int s = 0; s < 2; ++s) support[s] = contact(s) ? support[s] : 0.0;
     controller_.set_reference(model_, history_.q(F - 2), history_.q(F - 1), history_.q(F), dt, support);
-    if (cfg_.controller.per_frame_targets && !control_) sim_.targets() = history_.q(F + cfg_.controller.target_lead);
+    if (cfg_.controller.per_frame_targets && !control_) {
+      sim_.targets() = history_.q(F + cfg_.controller.target_lead);
+      if (correction_policy_ &&
+          correction_policy_->correct(model_, retarget_, sim_.data(),
+                                      {&history_.q(F - 1), &history_.q(F), &history_.q(F + 1), &history_.q(F + 2), &history_.q(F + 3)},
+                                      sim_.targets()))
+        ++corrections_;
+    }
     if (!control_ && cfg_.controller.velocity_targets) sim_.target_velocities() = controller_.reference_velocity();
     out_time_ = hd.time;
     const bool policy = control_ != nullptr;
@@ -289,6 +312,8 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
   N3PPhysicsConfig cfg_;
   Direct direct_;
   std::unique_ptr<ControlPredictor> control_;
+  std::unique_ptr<Correction> correction_policy_;
+  long long corrections_ = 0;
   features::n3p::TrackerSet ctl_o_[3];
   std::array<bool, 3> ctl_present_[3];
   long long policy_steps_ = 0;

@@ -115,6 +115,7 @@ class Simulator {
   // PD targets in the configuration layout (quaternions for spherical joints, angles for revolute).
   // The free root's entries are the root servo's target (velocities in the target's body frame).
   VecQ& targets() { return q_target_; }
+  const VecQ& targets() const { return q_target_; }
   VecV& target_velocities() { return v_target_; }
   // Generalised torques added in both modes (free root entries: body-frame wrench).
   VecV& torques() { return tau_user_; }

@@ -34,7 +34,7 @@ inline constexpr int kWeightsVersion = 1;
 inline const std::vector<std::string>& known_model_kinds() {
   static const std::vector<std::string> kinds = {"mlp",        "gru",       "sequential",
                                                  "lobstr",     "n3p_signal", "n3p_lower",
-                                                 "n3p_upper",  "n3p_policy", "questsim_policy"};
+                                                 "n3p_upper",  "n3p_policy", "n3p_correction_policy", "questsim_policy"};
   return kinds;
 }
 
