@@ -4,6 +4,9 @@
 //                             reference retargeting, controller reference (RNEA), 4 simulation steps
 //                             (controller torques + tracker correction + contact + ABA), fall check,
 //                             output retargeting; the 10 Hz control step amortised (every 3rd frame)
+//   BM_N3PPhysicsFrameCorrected  the same with a learned correction of the PD targets every frame
+//                             (set_correction_policy: 4 reference kinematics, s, MLP 1008-256-256-48
+//                             tanh; random weights of the trained policy's shape)
 //   BM_N3PPhysicsDirectPart   the direct-mode pipeline frame alone (the predictor part)
 //   BM_N3PPhysicsSimStep      one 120 Hz step: controller torques + tracker correction + Simulator::step
 //   BM_N3PPhysicsReference    the per-frame controller reference (finite differences + RNEA)
@@ -11,6 +14,10 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <random>
+#include <string>
+
+#include <nlohmann/json.hpp>
 
 #include "sparsebody/avatar/n3p_physics.hpp"
 
@@ -44,11 +51,34 @@ trackers::TrackerFrame frame(long t) {
   return f;
 }
 
+// A correction policy of the trained one's shape with random weights (N(0, 0.05^2)): same cost.
 template <class P>
-void physics_frame(benchmark::State& state) {
+std::shared_ptr<const typename P::CorrectionWeights> random_correction() {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g(0.0, 0.05);
+  const int sizes[4] = {1008, 256, 256, 48};
+  nlohmann::json d;
+  d["format"] = "sparsebody-weights";
+  d["version"] = 1;
+  d["kind"] = "n3p_correction_policy";
+  d["meta"] = {{"input_size", 1008}, {"output_size", 48}, {"action_scale", 0.2}};
+  for (int l = 0; l < 3; ++l) {
+    std::vector<double> wv(std::size_t(sizes[l + 1]) * sizes[l]), bv(sizes[l + 1]);
+    for (auto& x : wv) x = g(rng);
+    for (auto& x : bv) x = g(rng);
+    const std::string n = "layers." + std::to_string(l);
+    d["tensors"][n + ".weight"] = {{"shape", {sizes[l + 1], sizes[l]}}, {"data", wv}};
+    d["tensors"][n + ".bias"] = {{"shape", {sizes[l + 1]}}, {"data", bv}};
+  }
+  return P::Correction::parse(d.dump(), "random correction policy");
+}
+
+template <class P>
+void physics_frame(benchmark::State& state, bool corrected = false) {
   const auto* w = weights<P>();
   if (!w) return state.SkipWithError("default weights not found");
   P p(*w);
+  if (corrected) p.set_correction_policy(random_correction<P>());
   long t = 0;
   for (; t < 30; ++t) p.push(frame(t));
   double passes = 0, frames = 0;
@@ -64,8 +94,12 @@ void physics_frame(benchmark::State& state) {
 }
 void BM_N3PPhysicsFrame(benchmark::State& s) { physics_frame<Physics>(s); }
 void BM_N3PPhysicsFrameQ8(benchmark::State& s) { physics_frame<PhysicsQ8>(s); }
+void BM_N3PPhysicsFrameCorrected(benchmark::State& s) { physics_frame<Physics>(s, true); }
+void BM_N3PPhysicsFrameCorrectedQ8(benchmark::State& s) { physics_frame<PhysicsQ8>(s, true); }
 BENCHMARK(BM_N3PPhysicsFrame)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_N3PPhysicsFrameQ8)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_N3PPhysicsFrameCorrected)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_N3PPhysicsFrameCorrectedQ8)->Unit(benchmark::kMicrosecond);
 
 void BM_N3PPhysicsDirectPart(benchmark::State& state) {
   const auto* w = weights();

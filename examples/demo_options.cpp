@@ -16,7 +16,7 @@ void usage(const char* msg) {
                "                       [--mode streaming|window] [--no-contact-ik] [--trackers-out trackers.csv]\n"
                "                       [--calibration-frame N] [--devices [--device-seed S] [--devices-stand T]]\n"
                "                       [--storage auto|float|f16|q8]\n"
-               "                       [--physics] [--html page.html [--three-js three.min.js]] [--quiet]\n"
+               "                       [--physics [--correction FILE]] [--html page.html [--three-js three.min.js]] [--quiet]\n"
                "calibration: automatic from standing windows (default); --calibration-frame N forces input frame N\n"
                "             (a T-pose or an upright standing frame); BVH input without --devices is sized by leg length\n"
                "exit codes: 0 done; 1 the run failed (no usable calibration, a model the input cannot drive);\n"
@@ -42,6 +42,7 @@ Options parse_options(int argc, char** argv) {
       else usage("--model must be auto, lobstr, n3p or questsim");
     } else if (a == "--no-pelvis") o.no_pelvis = true;
     else if (a == "--physics") o.physics = true;
+    else if (a == "--correction") o.correction = next();
     else if (a == "--storage") {
       o.storage = next();
       if (o.storage != "auto" && o.storage != "float" && o.storage != "f16" && o.storage != "q8")

@@ -12,6 +12,7 @@ struct Options {
   std::string input, output = "avatar.bvh", weights, trackers_out;
   // --html FILE: the browser page of the run (demo_viewer.hpp); three_js: --three-js PATH, then the file found.
   std::string html, three_js;
+  std::string correction;  // --physics: a learned correction of the PD targets (n3p_correction_policy JSON)
   Model model = Model::Auto;
   sparsebody::avatar::RunMode mode = sparsebody::avatar::RunMode::Streaming;
   bool contact_ik = true, quiet = false, no_pelvis = false, physics = false;

@@ -12,7 +12,7 @@
 // Physics mode is 0.1 s behind its input; by default its output is compared with the ground truth
 // of the frame it reproduces (output_frame(), the paper's "shift forward by 0.1 s", §8.4-8.5);
 // --no-shift compares with the current frame instead.
-//   n3p_physics_eval FILE.json [--clips N] [--every K] [--no-shift] [--weights PREFIX]
+//   n3p_physics_eval FILE.json [--clips N] [--every K] [--offset I] [--no-shift] [--weights PREFIX]
 //     [--root-kp X] [--root-kd X] [--root-kr X] [--root-dr X] [--max-force N] [--max-torque NM]
 //     [--feedforward SCALE] [--correction-kp X] [--target-lead FRAMES] [--hold-targets 0|1] [--contact-passes N]
 //     [--stance-support 0|1] [--support-moment 0|1] [--support-on-contact 0|1]
@@ -45,7 +45,7 @@ namespace {
 struct Options {
   const char* file = nullptr;
   std::string prefix = SPARSEBODY_N3P_WEIGHTS;
-  int max_clips = 1 << 30, every = 1;
+  int max_clips = 1 << 30, every = 1, offset = 0;  // clips offset, offset + every, ...
   bool shift = true;
   std::string correction;
   avatar::N3PPhysicsConfig cfg;
@@ -97,6 +97,7 @@ Options parse_options(int argc, char** argv) {
     if (num("--hold-targets", hold)) { cc.per_frame_targets = hold == 0; continue; }
     if (num("--clips", count)) { o.max_clips = static_cast<int>(count); continue; }
     if (num("--every", count)) { o.every = std::max(1, static_cast<int>(count)); continue; }
+    if (num("--offset", count)) { o.offset = std::max(0, static_cast<int>(count)); continue; }
     if (!std::strcmp(argv[i], "--no-shift")) o.shift = false;
     else if (!std::strcmp(argv[i], "--weights") && i + 1 < argc) o.prefix = argv[++i];
     else if (!std::strcmp(argv[i], "--correction") && i + 1 < argc) o.correction = argv[++i];
@@ -293,7 +294,7 @@ int main(int argc, char** argv) {
   Totals tot;
   int idx = -1;
   for (const auto& c : dump.d["clips"]) {
-    if (++idx % o.every != 0) continue;
+    if (++idx < o.offset || (idx - o.offset) % o.every != 0) continue;
     if (tot.clips >= o.max_clips) break;
     ++tot.clips;
     evaluate_clip(c, w, cw, o, dump, feet, tot);

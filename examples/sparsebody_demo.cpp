@@ -3,7 +3,7 @@
 //   sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p|questsim] [--no-pelvis]
 //                   [--weights FILE|DIR] [--mode streaming|window] [--no-contact-ik]
 //                   [--trackers-out trackers.csv] [--calibration-frame N] [--devices [--device-seed S]]
-//                   [--storage auto|float|f16|q8] [--physics] [--html page.html [--three-js PATH]] [--quiet]
+//                   [--storage auto|float|f16|q8] [--physics [--correction FILE]] [--html page.html [--three-js PATH]] [--quiet]
 //
 // Model choice (--model auto, the default): LoBSTr when the input has a pelvis tracker (it needs
 // one), Neural3Points (direct mode) when it has only the headset and controllers, which is what
@@ -12,7 +12,8 @@
 // --physics runs Neural3Points' normal mode: the prediction drives a simulated avatar (120 Hz, PD
 // servos, the default model-based controller with its bounded residual wrench; avatar/n3p_physics.hpp).
 // Its output is 0.1 s behind the input; the metrics compare it with the frame it reproduces, and the
-// residual wrench and falls are printed at the end.
+// residual wrench and falls are printed at the end. --correction FILE adds a learned correction of
+// its PD targets (weights_tool.questsim.train --task n3p; README "Neural3Points physics").
 // --model questsim runs QuestSim (avatar/questsim_session.hpp): the torque policy
 // (examples/weights/questsim_policy.json, trained on this machine's CPU and weak: README) drives a
 // simulated avatar sized to the stature the automatic calibration finds, 0.17 s behind the input;
@@ -128,12 +129,14 @@ int run_n3p_physics(const Options& o, Input& in) {
   avatar::N3PPhysicsConfig cfg;
   cfg.direct.foot_ik = o.contact_ik;
   Pipeline pipe(w, cfg);
+  if (!o.correction.empty()) pipe.set_correction_policy(Pipeline::load_correction(o.correction));
   auto set_scale = [&](double s) { set_n3p_scale(pipe, s); };
   if (!fit_user(o, in, pipe, set_scale)) return 1;
   std::printf("model   Neural3Points physics (normal) mode %s: G_sig/G_lo/G_up hidden %d/%d/%d, %s weights, simulated\n"
-              "        avatar %d bodies / %d DoF at 120 Hz, model-based controller, output %.1f s behind the input\n",
+              "        avatar %d bodies / %d DoF at 120 Hz, model-based controller%s%s, output %.1f s behind the input\n",
               o.weights.c_str(), Direct::kHiddenSignal, Direct::kHiddenLower, Direct::kHiddenUpper, o.storage.c_str(),
-              pipe.model().nb, pipe.model().nv, pipe.delay_seconds());
+              pipe.model().nb, pipe.model().nv, o.correction.empty() ? "" : " + learned target correction ", o.correction.c_str(),
+              pipe.delay_seconds());
   print_credit(w.lo->info().credit);
   in.model = "Neural3Points physics (normal) mode, " + o.storage + " weights, output 0.1 s behind the input";
   const double t0 = in.frames.front().time;  // the output is delayed: the time it shows, not the last step's
@@ -187,6 +190,10 @@ int run_questsim_weights(Options& o, Input& in) {
 // --model auto: LoBSTr when the input has a pelvis tracker, Neural3Points otherwise (and for
 // --physics). Prints the choice and why; nothing (after the error) when the input cannot drive it.
 std::optional<Model> choose_model(const Options& o, const Input& in) {
+  if (!o.correction.empty() && !o.physics) {
+    std::fprintf(stderr, "error: --correction corrects the PD targets of --physics (Neural3Points' normal mode)\n");
+    return std::nullopt;
+  }
   if (o.model == Model::QuestSim) {
     std::printf("choice  QuestSim: --model questsim (torque policy on a simulated avatar; headset and controllers)\n");
     return o.model;

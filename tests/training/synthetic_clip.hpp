@@ -2,6 +2,7 @@
 // shipped lower-body weights) and a synthetic clip of it.
 #pragma once
 #include <cmath>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -60,6 +61,16 @@ inline recordings::BvhClip synthetic_clip() {
     c.motion.insert(c.motion.end(), row.begin(), row.end());
   }
   return c;
+}
+
+// n x A actions drawn from N(0, scale^2), row-major, from a seeded stream.
+template <int A>
+std::vector<float> random_actions(int n, unsigned seed, float scale) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> g(0.f, scale);
+  std::vector<float> a(static_cast<std::size_t>(n) * A);
+  for (float& x : a) x = g(rng);
+  return a;
 }
 
 }  // namespace training_test

@@ -33,11 +33,7 @@ std::shared_ptr<const std::vector<training::QuestSimReference>> clips30() {
 }
 
 std::vector<float> random_actions(int n, unsigned seed, float scale) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<float> g(0.f, scale);
-  std::vector<float> a(static_cast<std::size_t>(n) * Env::kActionSize);
-  for (auto& x : a) x = g(rng);
-  return a;
+  return training_test::random_actions<Env::kActionSize>(n, seed, scale);
 }
 
 bool same_bits(const float* a, const float* b, std::size_t n) { return std::memcmp(a, b, n * sizeof(float)) == 0; }

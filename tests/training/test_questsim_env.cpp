@@ -32,11 +32,7 @@ std::shared_ptr<const std::vector<training::QuestSimReference>> clips() {
 }
 
 std::vector<float> random_actions(int n, unsigned seed, float scale) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<float> g(0.f, scale);
-  std::vector<float> a(static_cast<std::size_t>(n) * Env::kActionSize);
-  for (float& x : a) x = g(rng);
-  return a;
+  return training_test::random_actions<Env::kActionSize>(n, seed, scale);
 }
 
 }  // namespace

@@ -43,6 +43,60 @@ py::array view(py::object owner, T* data, std::vector<py::ssize_t> shape) {
   return py::array_t<T>(shape, data, owner);
 }
 
+// What both environments bind alike: sizes, zero-copy views of their buffers, step and the
+// per-character queries. `terms`: columns of reward_terms.
+template <class E>
+void bind_common(py::class_<E>& c, int terms) {
+  c.def_property_readonly_static("obs_size", [](py::object) { return E::kObservationSize; })
+      .def_property_readonly_static("action_size", [](py::object) { return E::kActionSize; })
+      .def("__len__", &E::size)
+      .def_property_readonly("obs", [](py::object self) {
+        E& e = self.cast<E&>();
+        return view(self, e.observations(), {e.size(), E::kObservationSize});
+      })
+      .def_property_readonly("final_obs", [](py::object self) {
+        E& e = self.cast<E&>();
+        return view(self, const_cast<float*>(e.final_observations()), {e.size(), E::kObservationSize});
+      })
+      .def_property_readonly("reward", [](py::object self) {
+        E& e = self.cast<E&>();
+        return view(self, const_cast<float*>(e.rewards()), {e.size()});
+      })
+      .def_property_readonly("reward_terms", [terms](py::object self) {
+        E& e = self.cast<E&>();
+        return view(self, const_cast<float*>(e.reward_terms()), {e.size(), terms});
+      })
+      .def_property_readonly("terminated", [](py::object self) {
+        E& e = self.cast<E&>();
+        return view(self, const_cast<unsigned char*>(e.terminated()), {e.size()});
+      })
+      .def_property_readonly("truncated", [](py::object self) {
+        E& e = self.cast<E&>();
+        return view(self, const_cast<unsigned char*>(e.truncated()), {e.size()});
+      })
+      .def("step", [](E& e, py::array_t<float, py::array::c_style> a, int threads) {
+        if (a.ndim() != 2 || a.shape(0) != e.size() || a.shape(1) != E::kActionSize)
+          throw py::value_error("actions: expected float32 [" + std::to_string(e.size()) + ", " +
+                                std::to_string(E::kActionSize) + "]");
+        const float* p = a.data();
+        py::gil_scoped_release nogil;
+        e.step(p, threads);
+      }, py::arg("actions"), py::arg("threads") = 1)
+      .def("reset_all", &E::reset_all)
+      .def("set_residual", &E::set_residual, py::arg("max_force"), py::arg("max_torque"))
+      .def("clip", &E::clip)
+      .def("frame", &E::frame)
+      .def("episode_step", &E::episode_step)
+      .def("q", [](const E& e, int i) {
+        const auto& q = e.simulator(i).q();
+        return std::vector<double>(q.data(), q.data() + q.size());
+      })
+      .def("reference_q", [](const E& e, int i) {
+        const auto& q = e.reference_q(i);
+        return std::vector<double>(q.data(), q.data() + q.size());
+      });
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_questsim_env, m) {
@@ -81,63 +135,16 @@ PYBIND11_MODULE(_questsim_env, m) {
       .def_property("reward_k", [](const training::QuestSimEnvConfig& c) { return c.reward.k; },
                     [](training::QuestSimEnvConfig& c, std::array<double, 5> k) { c.reward.k = k; });
 
-  py::class_<Env>(m, "Env")
-      .def(py::init([](std::shared_ptr<Clips> c, const std::vector<double>& heights, unsigned long long seed,
-                       training::QuestSimEnvConfig cfg) { return std::make_unique<Env>(c->clips, c->meta, heights, seed, cfg); }),
-           py::arg("clips"), py::arg("heights"), py::arg("seed") = 0, py::arg("config") = training::QuestSimEnvConfig{})
-      .def_property_readonly_static("obs_size", [](py::object) { return Env::kObservationSize; })
-      .def_property_readonly_static("action_size", [](py::object) { return Env::kActionSize; })
-      .def("__len__", &Env::size)
-      .def_property_readonly("obs", [](py::object self) {
-        Env& e = self.cast<Env&>();
-        return view(self, e.observations(), {e.size(), Env::kObservationSize});
-      })
-      .def_property_readonly("final_obs", [](py::object self) {
-        Env& e = self.cast<Env&>();
-        return view(self, const_cast<float*>(e.final_observations()), {e.size(), Env::kObservationSize});
-      })
-      .def_property_readonly("reward", [](py::object self) {
-        Env& e = self.cast<Env&>();
-        return view(self, const_cast<float*>(e.rewards()), {e.size()});
-      })
-      .def_property_readonly("reward_terms", [](py::object self) {
-        Env& e = self.cast<Env&>();
-        return view(self, const_cast<float*>(e.reward_terms()), {e.size(), 5});
-      })
+  py::class_<Env> env(m, "Env");
+  bind_common(env, 5);
+  env.def(py::init([](std::shared_ptr<Clips> c, const std::vector<double>& heights, unsigned long long seed,
+                      training::QuestSimEnvConfig cfg) { return std::make_unique<Env>(c->clips, c->meta, heights, seed, cfg); }),
+          py::arg("clips"), py::arg("heights"), py::arg("seed") = 0, py::arg("config") = training::QuestSimEnvConfig{})
       .def_property_readonly("expert_actions", [](py::object self) {
         Env& e = self.cast<Env&>();
         return view(self, const_cast<float*>(e.expert_actions()), {e.size(), Env::kActionSize});
       })
-      .def_property_readonly("terminated", [](py::object self) {
-        Env& e = self.cast<Env&>();
-        return view(self, const_cast<unsigned char*>(e.terminated()), {e.size()});
-      })
-      .def_property_readonly("truncated", [](py::object self) {
-        Env& e = self.cast<Env&>();
-        return view(self, const_cast<unsigned char*>(e.truncated()), {e.size()});
-      })
-      .def("step", [](Env& e, py::array_t<float, py::array::c_style> a, int threads) {
-        if (a.ndim() != 2 || a.shape(0) != e.size() || a.shape(1) != Env::kActionSize)
-          throw py::value_error("actions: expected float32 [" + std::to_string(e.size()) + ", " +
-                                std::to_string(Env::kActionSize) + "]");
-        const float* p = a.data();
-        py::gil_scoped_release nogil;
-        e.step(p, threads);
-      }, py::arg("actions"), py::arg("threads") = 1)
-      .def("reset_all", &Env::reset_all)
-      .def("set_residual", &Env::set_residual, py::arg("max_force"), py::arg("max_torque"))
-      .def("clip", &Env::clip)
-      .def("frame", &Env::frame)
-      .def("episode_step", &Env::episode_step)
       .def("residual_force", &Env::root_residual_force)
-      .def("q", [](const Env& e, int i) {
-        const auto& q = e.simulator(i).q();
-        return std::vector<double>(q.data(), q.data() + q.size());
-      })
-      .def("reference_q", [](const Env& e, int i) {
-        const auto& q = e.reference_q(i);
-        return std::vector<double>(q.data(), q.data() + q.size());
-      })
       .def("sensor_positions", [](const Env& e, int i) {
         py::array_t<double> out({3, 3});
         auto r = out.mutable_unchecked<2>();
@@ -172,60 +179,13 @@ PYBIND11_MODULE(_questsim_env, m) {
                     [](training::N3PEnvConfig& c, double v) { c.controller.max_torque = v; });
 
   using NEnv = training::N3PEnv;
-  py::class_<NEnv>(m, "N3PEnv")
-      .def(py::init([](std::shared_ptr<Clips> c, int characters, unsigned long long seed, training::N3PEnvConfig cfg) {
+  py::class_<NEnv> nenv(m, "N3PEnv");
+  bind_common(nenv, 6);
+  nenv.def(py::init([](std::shared_ptr<Clips> c, int characters, unsigned long long seed, training::N3PEnvConfig cfg) {
              return std::make_unique<NEnv>(c->clips, c->meta, characters, seed, cfg);
            }),
            py::arg("clips"), py::arg("characters"), py::arg("seed") = 0, py::arg("config") = training::N3PEnvConfig{})
-      .def_property_readonly_static("obs_size", [](py::object) { return NEnv::kObservationSize; })
-      .def_property_readonly_static("action_size", [](py::object) { return NEnv::kActionSize; })
-      .def("__len__", &NEnv::size)
-      .def_property_readonly("obs", [](py::object self) {
-        NEnv& e = self.cast<NEnv&>();
-        return view(self, e.observations(), {e.size(), NEnv::kObservationSize});
-      })
-      .def_property_readonly("final_obs", [](py::object self) {
-        NEnv& e = self.cast<NEnv&>();
-        return view(self, const_cast<float*>(e.final_observations()), {e.size(), NEnv::kObservationSize});
-      })
-      .def_property_readonly("reward", [](py::object self) {
-        NEnv& e = self.cast<NEnv&>();
-        return view(self, const_cast<float*>(e.rewards()), {e.size()});
-      })
-      .def_property_readonly("reward_terms", [](py::object self) {
-        NEnv& e = self.cast<NEnv&>();
-        return view(self, const_cast<float*>(e.reward_terms()), {e.size(), 6});
-      })
-      .def_property_readonly("terminated", [](py::object self) {
-        NEnv& e = self.cast<NEnv&>();
-        return view(self, const_cast<unsigned char*>(e.terminated()), {e.size()});
-      })
-      .def_property_readonly("truncated", [](py::object self) {
-        NEnv& e = self.cast<NEnv&>();
-        return view(self, const_cast<unsigned char*>(e.truncated()), {e.size()});
-      })
-      .def("step", [](NEnv& e, py::array_t<float, py::array::c_style> a, int threads) {
-        if (a.ndim() != 2 || a.shape(0) != e.size() || a.shape(1) != NEnv::kActionSize)
-          throw py::value_error("actions: expected float32 [" + std::to_string(e.size()) + ", " +
-                                std::to_string(NEnv::kActionSize) + "]");
-        const float* p = a.data();
-        py::gil_scoped_release nogil;
-        e.step(p, threads);
-      }, py::arg("actions"), py::arg("threads") = 1)
-      .def("reset_all", &NEnv::reset_all)
-      .def("set_residual", &NEnv::set_residual, py::arg("max_force"), py::arg("max_torque"))
-      .def("clip", &NEnv::clip)
-      .def("frame", &NEnv::frame)
-      .def("episode_step", &NEnv::episode_step)
       .def("residual_force", &NEnv::residual_force)
-      .def("q", [](const NEnv& e, int i) {
-        const auto& q = e.simulator(i).q();
-        return std::vector<double>(q.data(), q.data() + q.size());
-      })
-      .def("reference_q", [](const NEnv& e, int i) {
-        const auto& q = e.reference_q(i);
-        return std::vector<double>(q.data(), q.data() + q.size());
-      })
       .def("targets", [](const NEnv& e, int i) {
         const auto& q = e.targets(i);
         return std::vector<double>(q.data(), q.data() + q.size());

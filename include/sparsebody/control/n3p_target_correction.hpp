@@ -107,6 +107,12 @@ class N3PTargetCorrection {
     action_scale_of(*w);
     return w;
   }
+  // The same from the text of such a file (`source` names it in messages).
+  static std::shared_ptr<const Weights> parse(const std::string& text, const std::string& source) {
+    auto w = Weights::from_string(text, networks::kN3PCorrectionPolicyKind, source);
+    action_scale_of(*w);
+    return w;
+  }
   static double action_scale_of(const Weights& w) {
     const auto& meta = w.info().meta;
     if (!meta.contains("action_scale") || !meta["action_scale"].is_number())
