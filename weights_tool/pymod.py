@@ -89,6 +89,9 @@ def demo_options(extra):
             kw["contact_ik"] = False
         elif a == "--physics":
             kw["physics"] = True
+        elif a == "--correction":
+            kw["correction"] = extra[i + 1]
+            i += 1
         elif a == "--no-pelvis":
             kw["no_pelvis"] = True
         elif a == "--devices":
@@ -112,10 +115,11 @@ def demo_options(extra):
 
 def run_clip(sb, path, model="lobstr", devices=False, device_seed=0, devices_stand=-1.0, no_pelvis=False,
              storage="auto", weights="", contact_ik=True, mode="streaming", physics=False, trackers_out="",
-             chunk=0, controller_swap=True):
+             chunk=0, controller_swap=True, correction=""):
     """sparsebody_demo INPUT --model MODEL [...] without the subprocess: the same input synthesis
     (read_input), the same sizing (trackers at the joints: leg length; otherwise the automatic
-    calibration), the same frame loop. physics (or model "n3p_physics"): Neural3Points' normal mode.
+    calibration), the same frame loop. physics (or model "n3p_physics"): Neural3Points' normal mode,
+    correction: its learned PD-target correction (an n3p_correction_policy file).
     chunk > 0 feeds the frames in batches of that many (the result is the same). Raises ValueError
     where the demo exits with an error (LoBSTr without a pelvis tracker)."""
     if physics and model == "lobstr":
@@ -128,7 +132,8 @@ def run_clip(sb, path, model="lobstr", devices=False, device_seed=0, devices_sta
                         no_pelvis=no_pelvis, trackers_out=trackers_out)
     if model == "lobstr" and not inp["pelvis"]:
         raise ValueError(f"{path} has no valid pelvis tracker frame; LoBSTr needs one (use model n3p)")
-    pipe = sb.create(model, weights=weights, storage=storage, contact_ik=contact_ik, mode=mode, controller_swap=controller_swap)
+    pipe = sb.create(model, weights=weights, storage=storage, contact_ik=contact_ik, mode=mode, controller_swap=controller_swap,
+                     correction=correction)
     if inp["at_joints"]:
         L = inp["lengths"]
         pipe.fit_leg_length(inp["leg"], L["torso"], L["arm"])

@@ -146,6 +146,8 @@ class Pipeline {
   virtual void run(const pymod::FrameBatch& in, const pymod::OutputBatch& out) = 0;  // without the GIL
   virtual py::dict summary() const { return py::dict(); }
   virtual bool physics() const { return false; }
+  // A learned correction of the PD targets (Neural3Points physics mode only; '' removes it).
+  virtual void set_correction(const std::string&) { throw py::value_error("correction: Neural3Points physics mode (n3p_physics) only"); }
 
   std::string model, weights, storage, description;
   double prev_time = -std::numeric_limits<double>::infinity();  // strict mode: times must increase
@@ -186,6 +188,10 @@ class PipelineOf : public Pipeline {
   const features::CalibrationReport& report() const override { return p_.calibration_report(); }
   void run(const pymod::FrameBatch& in, const pymod::OutputBatch& out) override { pymod::run_batch(p_, in, out, last_tick); }
   bool physics() const override { return pymod::detail::is_physics<P>::value; }
+  void set_correction(const std::string& path) override {
+    if constexpr (pymod::detail::is_physics<P>::value) p_.set_correction_policy(path.empty() ? nullptr : P::load_correction(path));
+    else Pipeline::set_correction(path);
+  }
   py::dict summary() const override {
     py::dict d;
     if constexpr (pymod::detail::is_physics<P>::value) {
@@ -194,6 +200,7 @@ class PipelineOf : public Pipeline {
       d["residual_force_max"] = r.force_max, d["residual_torque_max"] = r.torque_max;
       d["residual_steps"] = r.steps, d["falls"] = p_.falls(), d["sim_failures"] = p_.sim_failures();
       d["restarts"] = p_.restarts(), d["delay_seconds"] = P::delay_seconds();
+      d["corrections"] = p_.corrections();
     }
     return d;
   }
@@ -243,7 +250,7 @@ std::unique_ptr<Pipeline> make(const std::string& path, const C& cfg) {
 }
 
 std::unique_ptr<Pipeline> create(const std::string& model, std::string weights, const std::string& storage_in, bool contact_ik,
-                                 const std::string& mode, bool controller_swap = true) {
+                                 const std::string& mode, bool controller_swap = true, const std::string& correction = "") {
   const std::string storage = resolve_storage(storage_in);
   if (mode != "streaming" && mode != "window") throw py::value_error("mode must be streaming or window, got '" + mode + "'");
   std::unique_ptr<Pipeline> p;
@@ -296,6 +303,10 @@ std::unique_ptr<Pipeline> create(const std::string& model, std::string weights, 
   }
   p->model = model, p->weights = weights, p->storage = storage;
   p->description = what + ", " + storage + " weights " + weights;
+  if (!correction.empty()) {
+    p->set_correction(correction);
+    p->description += ", learned target correction " + correction;
+  }
   return p;
 }
 
@@ -624,16 +635,19 @@ PYBIND11_MODULE(sparsebody, m) {
       .def("__repr__", [](const Pipeline& p) { return "<sparsebody.Pipeline " + p.description + ">"; });
 
   m.def("create", &create, py::arg("model"), py::arg("weights") = "", py::arg("storage") = "auto", py::arg("contact_ik") = true,
-        py::arg("mode") = "streaming", py::arg("controller_swap") = true,
+        py::arg("mode") = "streaming", py::arg("controller_swap") = true, py::arg("correction") = "",
         "A pipeline: model 'lobstr', 'n3p' (direct) or 'n3p_physics'; weights '' = the shipped examples/weights; storage "
         "auto|float|f16|q8 (auto: the build's fastest, the demo's default); contact_ik as the demo's (--no-contact-ik = False); "
-        "controller_swap: exchange controllers found in the other hands (trackers/controller_swap.hpp).");
+        "controller_swap: exchange controllers found in the other hands (trackers/controller_swap.hpp); correction: "
+        "n3p_physics only, a learned correction of the PD targets (n3p_correction_policy JSON, avatar/n3p_physics.hpp).");
   m.def("LoBSTr", [](const std::string& w, const std::string& s, bool ik, const std::string& mode) { return create("lobstr", w, s, ik, mode); },
         py::arg("weights") = "", py::arg("storage") = "auto", py::arg("contact_ik") = true, py::arg("mode") = "streaming");
   m.def("N3PDirect", [](const std::string& w, const std::string& s, bool ik) { return create("n3p", w, s, ik, "streaming"); },
         py::arg("weights") = "", py::arg("storage") = "auto", py::arg("foot_ik") = true);
-  m.def("N3PPhysics", [](const std::string& w, const std::string& s, bool ik) { return create("n3p_physics", w, s, ik, "streaming"); },
-        py::arg("weights") = "", py::arg("storage") = "auto", py::arg("foot_ik") = true);
+  m.def("N3PPhysics", [](const std::string& w, const std::string& s, bool ik, const std::string& c) {
+          return create("n3p_physics", w, s, ik, "streaming", true, c);
+        },
+        py::arg("weights") = "", py::arg("storage") = "auto", py::arg("foot_ik") = true, py::arg("correction") = "");
 
   py::class_<QuestSim>(m, "QuestSim", "QuestSim torque policy on the simulated avatar (explicit weights: examples/weights/questsim_policy.json is the shipped, weak, trained one)")
       .def(py::init([](const std::string& w, double h) {

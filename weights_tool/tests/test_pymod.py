@@ -94,6 +94,40 @@ def test_output_bvh_equals_the_demos_byte_for_byte(sb, demo, tmp_path, opts):
     assert same_output(ref, mine), f"{mine} differs from the demo's {ref}"
 
 
+def constant_correction(path, bias):
+    """An n3p_correction_policy whose every output is tanh(bias) (zero weights): a test double."""
+    from weights_tool.format import write_weights
+    sizes = [1008, 256, 256, 48]
+    sd = {}
+    for l in range(3):
+        sd[f"layers.{l}.weight"] = np.zeros((sizes[l + 1], sizes[l]), np.float32)
+        sd[f"layers.{l}.bias"] = np.full(sizes[l + 1], bias if l == 2 else 0.0, np.float32)
+    write_weights(str(path), sd, "n3p_correction_policy", 1008, 48, meta={"action_scale": 0.2})
+    return str(path)
+
+
+def test_physics_correction_equals_the_demos(sb, demo, tmp_path):
+    """--physics --correction FILE: the module's create(correction=FILE) writes the demo's BVH; the
+    correction changes the motion; a kinematic pipeline refuses it."""
+    need_clip()
+    corr = constant_correction(tmp_path / "corr.json", 0.3)
+    ref, mine, plain = tmp_path / "demo.bvh", tmp_path / "module.bvh", tmp_path / "plain.bvh"
+    opts = ["--model", "n3p", "--physics", "--correction", corr]
+    r = subprocess.run([demo, CLIP, "-o", str(ref), "--quiet"] + opts, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    run = pymod.run_clip(sb, CLIP, **pymod.demo_options(opts))
+    assert run.pipe.summary()["corrections"] > 500
+    sb.write_bvh(str(mine), run.pipe, run.out)
+    assert same_output(ref, mine)
+    base = pymod.run_clip(sb, CLIP, physics=True, model="n3p")
+    sb.write_bvh(str(plain), base.pipe, base.out)
+    assert not same_output(mine, plain)
+    with pytest.raises(ValueError, match="physics mode"):
+        sb.create("n3p", correction=corr)
+    r = subprocess.run([demo, CLIP, "-o", str(ref), "--quiet", "--model", "n3p", "--correction", corr], capture_output=True, text=True)
+    assert r.returncode != 0 and "--correction" in r.stderr
+
+
 def test_tracker_csv_path_equals_the_demos(sb, demo, tmp_path):
     """--trackers-out writes the same CSV, and the CSV read back drives the same output."""
     need_clip()
