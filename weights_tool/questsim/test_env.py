@@ -148,3 +148,10 @@ def test_n3p_trainer_runs_resumes_and_exports(clip_paths, tmp_path):
     assert len(rows) == 21 and float(rows[-1].split(",")[11]) < 620  # continued; the residual bound annealed
     with pytest.raises(SystemExit, match="no DAgger"):
         train.main(args + ["--bc-iters", "2"])
+    warm = tmp_path / "warm"  # a new run from the exported policy (its weights and statistics; a fresh critic)
+    train.main([d, "--task", "n3p", "--out", str(warm), "--envs", "8", "--horizon", "8", "--samples", "1920", "--motions", ".",
+                "--init-json", str(tmp_path / "n3p_correction_policy.json"), "--value-warmup", "2"])
+    assert len(open(warm / "curve.csv").read().splitlines()) == 11  # from 1280 samples (the export's) to 1920
+    with pytest.raises(SystemExit, match="expected a n3p_correction_policy"):
+        train.main([d, "--task", "n3p", "--out", str(tmp_path / "bad"), "--envs", "8", "--horizon", "8", "--samples", "1920",
+                    "--motions", ".", "--init-json", N3P_LOWER])

@@ -138,13 +138,13 @@ def export_n3p(path, model, stats, n_obs, n_act, info):
                   normalization={"input_mean": stats.mean.astype(np.float32), "input_std": stats.std(0.05).astype(np.float32)})
 
 
-def init_from_json(path, model, stats, n_obs, n_act):
+def init_from_json(path, model, stats, n_obs, n_act, kind="questsim_policy"):
     """Loads an exported policy (export() above) into model.actor and stats; returns (iteration, samples).
     The checkpoint's optimiser state and critic are not in the export: Adam and the critic start afresh."""
     doc, tensors, norm = read_weights(path)
     meta = doc.get("meta", {})
-    if doc.get("kind") != "questsim_policy" or meta.get("input_size") != n_obs or meta.get("output_size") != n_act:
-        raise SystemExit(f"{path}: expected a questsim_policy {n_obs} -> {n_act}, found {doc.get('kind')} "
+    if doc.get("kind") != kind or meta.get("input_size") != n_obs or meta.get("output_size") != n_act:
+        raise SystemExit(f"{path}: expected a {kind} {n_obs} -> {n_act}, found {doc.get('kind')} "
                          f"{meta.get('input_size')} -> {meta.get('output_size')}")
     own = model.actor.state_dict()
     if set(own) != set(tensors):
@@ -228,8 +228,8 @@ def main(argv=None):
                     help="n3p: reward weight of exp(-|residual force| / body weight)")
     a = ap.parse_args(argv)
     n3p = a.task == "n3p"
-    if n3p and (a.bc_iters or a.init_json):
-        raise SystemExit("--task n3p: no DAgger (--bc-iters) and no --init-json")
+    if n3p and a.bc_iters:
+        raise SystemExit("--task n3p: no DAgger (--bc-iters)")
     torch.set_num_threads(a.threads)
     torch.manual_seed(a.seed)
     os.makedirs(a.out, exist_ok=True)
@@ -268,7 +268,7 @@ def main(argv=None):
         torch.set_rng_state(s["torch_rng"])
         print(f"resumed at iteration {it}, {samples / 1e6:.2f} M samples", flush=True)
     elif a.init_json:
-        it, samples = init_from_json(a.init_json, model, stats, n_obs, n_act)
+        it, samples = init_from_json(a.init_json, model, stats, n_obs, n_act, "n3p_correction_policy" if n3p else "questsim_policy")
         print(f"policy from {a.init_json} ({samples / 1e6:.2f} M samples, iteration {it}); value function afresh, "
               f"{a.value_warmup} value-only updates first", flush=True)
     it_start = it
