@@ -97,13 +97,7 @@ class N3PControlPredictor {
     // 1. the committed state with the character's joint states, in h^{t-3} = h_ref.
     work_ = committed_;
     const features::HeadingFrame href = committed_.h;
-    const dynamics::Vec3<S> origin = dynamics::Vec3<S>::Zero();
-    for (int j = 0; j < sk.size(); ++j) {
-      const int b = rt.body_of(j);
-      p_[j] = rt.from_sim_point(d.p[b].template cast<double>());
-      v_[j] = dynamics::point_velocity(d, b, origin).template cast<double>();
-      R_[j] = d.R[b].template cast<double>() * rt.alignment(j).conjugate().toRotationMatrix();  // W^s = W^a A^-1
-    }
+    for (int j = 0; j < sk.size(); ++j) rt.joint_state(d, j, p_[j], v_[j], R_[j]);
     auto write = [&](T* g, int K, int i, int j) {
       const Eigen::Vector3d p = href.point_to_local(p_[j]), v = href.vector_to_local(v_[j]);
       const Eigen::Matrix3d R = href.rotation_to_local(R_[j]);

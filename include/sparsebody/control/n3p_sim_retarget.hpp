@@ -115,6 +115,16 @@ class N3PSimRetarget {
   const Eigen::Quaterniond& alignment(int joint) const noexcept { return A_[joint]; }  // A_j
   Eigen::Vector3d to_sim_point(const Eigen::Vector3d& p) const noexcept { return p + Eigen::Vector3d(0, dy_, 0); }
   Eigen::Vector3d from_sim_point(const Eigen::Vector3d& p) const noexcept { return p - Eigen::Vector3d(0, dy_, 0); }
+  // Skeleton joint j's world state in a simulated state d (world kinematics with velocities):
+  // position (back out of the simulation's lift), linear velocity of the body origin, and the
+  // skeleton joint's rotation W^s = W^a A^-1. The policies' x_t (control/n3p_control_predictor.hpp,
+  // control/n3p_target_correction.hpp).
+  void joint_state(const dynamics::Data<S, MB, MD>& d, int j, Eigen::Vector3d& p, Eigen::Vector3d& v, Eigen::Matrix3d& R) const noexcept {
+    const int b = body_[j];
+    p = from_sim_point(d.p[b].template cast<double>());
+    v = dynamics::point_velocity(d, b, dynamics::Vec3<S>::Zero().eval()).template cast<double>();
+    R = d.R[b].template cast<double>() * A_[j].conjugate().toRotationMatrix();
+  }
 
   // BodyPose -> q (q must be sized nq).
   void to_q(const ModelT& m, const pose::BodyPose& p, VecQ& q) const noexcept {

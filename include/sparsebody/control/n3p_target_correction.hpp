@@ -35,20 +35,14 @@ template <class T, class S, int MB, int MD>
 inline void write_input(const N3PSimRetarget<S, MB, MD>& rt, const dynamics::Data<S, MB, MD>& sim,
                         const std::array<const dynamics::Data<S, MB, MD>*, 4>& ref, T* out) noexcept {
   namespace pol = n3p_policy;
-  const int root = rt.body_of(0);
-  auto rotation = [&](const dynamics::Data<S, MB, MD>& d, int j) {
-    return Eigen::Matrix3d(d.R[rt.body_of(j)].template cast<double>() * rt.alignment(j).conjugate().toRotationMatrix());
-  };
-  const features::HeadingFrame href =
-      features::HeadingFrame::from(rt.from_sim_point(ref[0]->p[root].template cast<double>()), rotation(*ref[0], 0).col(2));
+  Eigen::Vector3d p, v;
+  Eigen::Matrix3d R;
+  rt.joint_state(*ref[0], 0, p, v, R);
+  const features::HeadingFrame href = features::HeadingFrame::from(p, R.col(2));
   auto block = [&](const dynamics::Data<S, MB, MD>& d, T* o) {
-    const dynamics::Vec3<S> origin = dynamics::Vec3<S>::Zero();
     for (int j = 0; j < pol::kJoints; ++j) {
-      const int b = rt.body_of(j);
-      const Eigen::Matrix3d R = rotation(d, j);
-      pol::joint_block(href, rt.from_sim_point(d.p[b].template cast<double>()),
-                       Eigen::Vector3d(dynamics::point_velocity(d, b, origin).template cast<double>()), Eigen::Vector3d(R.col(2)),
-                       Eigen::Vector3d(R.col(1)), o, j);
+      rt.joint_state(d, j, p, v, R);
+      pol::joint_block(href, p, v, Eigen::Vector3d(R.col(2)), Eigen::Vector3d(R.col(1)), o, j);
     }
   };
   block(sim, out);
