@@ -13,7 +13,7 @@ void usage(const char* msg) {
   std::fprintf(stderr,
                "%s\nusage: sparsebody_demo INPUT.bvh|INPUT.csv [-o avatar.bvh] [--model auto|lobstr|n3p|questsim]\n"
                "                       [--no-pelvis] [--weights FILE (LoBSTr, QuestSim) | DIR (Neural3Points: n3p_{signal,lower,upper}.json)]\n"
-               "                       [--mode streaming|window] [--no-contact-ik] [--trackers-out trackers.csv]\n"
+               "                       [--mode streaming|window] [--no-contact-ik] [--foot-pin ankle|toe] [--trackers-out trackers.csv]\n"
                "                       [--calibration-frame N] [--devices [--device-seed S] [--devices-stand T]]\n"
                "                       [--storage auto|float|f16|q8]\n"
                "                       [--physics [--correction FILE]] [--html page.html [--three-js three.min.js]] [--quiet]\n"
@@ -54,6 +54,12 @@ Options parse_options(int argc, char** argv) {
       else if (m == "window") o.mode = sparsebody::avatar::RunMode::Window;
       else usage("--mode must be streaming or window");
     } else if (a == "--no-contact-ik") o.contact_ik = false;
+    else if (a == "--foot-pin") {
+      const std::string m = next();
+      if (m == "ankle") o.toe_pin = false;
+      else if (m == "toe") o.toe_pin = true;
+      else usage("--foot-pin must be ankle or toe");
+    }
     else if (a == "--trackers-out") o.trackers_out = next();
     else if (a == "--html") o.html = next();
     else if (a == "--three-js") o.three_js = next();

@@ -16,6 +16,7 @@ struct Options {
   Model model = Model::Auto;
   sparsebody::avatar::RunMode mode = sparsebody::avatar::RunMode::Streaming;
   bool contact_ik = true, quiet = false, no_pelvis = false, physics = false;
+  bool toe_pin = true;  // --foot-pin toe|ankle: what Neural3Points direct mode pins (N3PConfig::pin)
   std::string storage = default_storage();
   // Calibration: automatic (standing windows) unless --calibration-frame N forces frame N.
   bool calibration_forced = false;

@@ -92,6 +92,9 @@ def demo_options(extra):
         elif a == "--correction":
             kw["correction"] = extra[i + 1]
             i += 1
+        elif a == "--foot-pin":
+            kw["foot_pin"] = extra[i + 1]
+            i += 1
         elif a == "--no-pelvis":
             kw["no_pelvis"] = True
         elif a == "--devices":
@@ -115,11 +118,12 @@ def demo_options(extra):
 
 def run_clip(sb, path, model="lobstr", devices=False, device_seed=0, devices_stand=-1.0, no_pelvis=False,
              storage="auto", weights="", contact_ik=True, mode="streaming", physics=False, trackers_out="",
-             chunk=0, controller_swap=True, correction=""):
+             chunk=0, controller_swap=True, correction="", foot_pin="toe"):
     """sparsebody_demo INPUT --model MODEL [...] without the subprocess: the same input synthesis
     (read_input), the same sizing (trackers at the joints: leg length; otherwise the automatic
     calibration), the same frame loop. physics (or model "n3p_physics"): Neural3Points' normal mode,
-    correction: its learned PD-target correction (an n3p_correction_policy file).
+    correction: its learned PD-target correction (an n3p_correction_policy file). foot_pin: what
+    Neural3Points direct mode pins, "toe" (default) or "ankle" (the demo's --foot-pin).
     chunk > 0 feeds the frames in batches of that many (the result is the same). Raises ValueError
     where the demo exits with an error (LoBSTr without a pelvis tracker)."""
     if physics and model == "lobstr":
@@ -133,7 +137,7 @@ def run_clip(sb, path, model="lobstr", devices=False, device_seed=0, devices_sta
     if model == "lobstr" and not inp["pelvis"]:
         raise ValueError(f"{path} has no valid pelvis tracker frame; LoBSTr needs one (use model n3p)")
     pipe = sb.create(model, weights=weights, storage=storage, contact_ik=contact_ik, mode=mode, controller_swap=controller_swap,
-                     correction=correction)
+                     correction=correction, foot_pin=foot_pin)
     if inp["at_joints"]:
         L = inp["lengths"]
         pipe.fit_leg_length(inp["leg"], L["torso"], L["arm"])

@@ -109,11 +109,10 @@ TEST_CASE("n3p default weights: feet stay put and the head on the headset while 
   MESSAGE("toe speed standing still: " << 100 * held << " cm/s held, " << 100 * free << " cm/s without the hold; head joint "
                                        << 100 * head_hold << " cm from the calibrated headset");
   CHECK(held < 0.01);
-  // the hold keeps the planted feet's orientation too: without it the toes turn about the pinned
-  // ankles. Since the default body is sized to the headset on the first frame, the stand's
-  // calibration refines the size instead of restarting the predictor, so even without the hold
-  // this stand creeps only 0.15 cm/s (0.45 before); the hold still does better (0.13).
-  CHECK(held < free);
+  // The toes are what is pinned (N3PConfig::Pin::Toe), so with or without the hold they do not
+  // move here. With the paper's ankle pin the toes turned about the pinned ankles: 0.15 cm/s
+  // without the hold, 0.13 with it (the hold keeps the planted feet's orientation).
+  CHECK(held <= free + 1e-6);
   CHECK(head_hold < 0.01);
 }
 

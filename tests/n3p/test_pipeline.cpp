@@ -156,42 +156,48 @@ TEST_CASE("n3p pipeline: HMD-only by configuration ignores tracked controllers")
 
 TEST_CASE("n3p direct mode: hands on the controllers, feet pinned while in contact") {
   const auto& g = golden();
-  avatar::N3PConfig c;
-  c.contact_threshold = -1.0;  // every frame in contact: both feet lock
-  c.foot_max_drift = 100.0;   // random weights: feet jump about; keep the locks for the test
-  n3p_test::SmallPipeline p(weights(), c), free(weights(), no_ik());
-  // synthetic trackers at the joints in the body convention: the identity calibration
-  p.set_calibration({});
-  free.set_calibration({});
-  const int hand[2] = {p.skeleton().find("Hand_L"), p.skeleton().find("Hand_R")};
-  const int foot[2] = {p.skeleton().find("Foot_L"), p.skeleton().find("Foot_R")};
-  const int upleg[2] = {p.skeleton().find("UpperLeg_L"), p.skeleton().find("UpperLeg_R")};
-  int on_controller = 0, checked = 0, pinned = 0;
-  Eigen::Vector3d prev[2];
-  for (int t = 0; t < 60; ++t) {
-    const auto f = n3p_test::golden_frame(g, t);
-    p.push(f);
-    free.push(f);
-    REQUIRE(finite(p));
-    for (int s = 0; s < 2; ++s) {
-      const Eigen::Vector3d target = trackers::to_eigen(f.pose[1 + s].position);
-      // IK never moves a hand away from its controller
-      if (f.valid[1 + s])
-        CHECK((p.world().position[hand[s]] - target).norm() <= (free.world().position[hand[s]] - target).norm() + 1e-9);
-      const double reach = p.skeleton().offsets[hand[s]].norm() + p.skeleton().offsets[hand[s] - 1].norm();
-      const int shoulder = hand[s] - 2;
-      if (f.valid[1 + s] && (target - p.world().position[shoulder]).norm() < reach - 1e-3) {
-        ++checked;
-        on_controller += (p.world().position[hand[s]] - target).norm() < 1e-6;
+  for (const auto pin : {avatar::N3PConfig::Pin::Toe, avatar::N3PConfig::Pin::Ankle}) {
+    CAPTURE(pin == avatar::N3PConfig::Pin::Toe);
+    avatar::N3PConfig c;
+    c.pin = pin;
+    c.contact_threshold = -1.0;  // every frame in contact: both feet lock
+    c.foot_max_drift = 100.0;   // random weights: feet jump about; keep the locks for the test
+    n3p_test::SmallPipeline p(weights(), c), free(weights(), no_ik());
+    // synthetic trackers at the joints in the body convention: the identity calibration
+    p.set_calibration({});
+    free.set_calibration({});
+    const int hand[2] = {p.skeleton().find("Hand_L"), p.skeleton().find("Hand_R")};
+    // the pinned point: the toe base (its ankle turns about it), or the ankle
+    const bool toe = pin == avatar::N3PConfig::Pin::Toe;
+    const int foot[2] = {p.skeleton().find(toe ? "Toes_L" : "Foot_L"), p.skeleton().find(toe ? "Toes_R" : "Foot_R")};
+    const int upleg[2] = {p.skeleton().find("UpperLeg_L"), p.skeleton().find("UpperLeg_R")};
+    int on_controller = 0, checked = 0, pinned = 0;
+    Eigen::Vector3d prev[2];
+    for (int t = 0; t < 60; ++t) {
+      const auto f = n3p_test::golden_frame(g, t);
+      p.push(f);
+      free.push(f);
+      REQUIRE(finite(p));
+      for (int s = 0; s < 2; ++s) {
+        const Eigen::Vector3d target = trackers::to_eigen(f.pose[1 + s].position);
+        // IK never moves a hand away from its controller
+        if (f.valid[1 + s])
+          CHECK((p.world().position[hand[s]] - target).norm() <= (free.world().position[hand[s]] - target).norm() + 1e-9);
+        const double reach = p.skeleton().offsets[hand[s]].norm() + p.skeleton().offsets[hand[s] - 1].norm();
+        const int shoulder = hand[s] - 2;
+        if (f.valid[1 + s] && (target - p.world().position[shoulder]).norm() < reach - 1e-3) {
+          ++checked;
+          on_controller += (p.world().position[hand[s]] - target).norm() < 1e-6;
+        }
+        if (t > 0 && p.foot_locked(s) && (prev[s] - p.world().position[upleg[s]]).norm() < 0.8) {
+          pinned += (p.world().position[foot[s]] - prev[s]).norm() < 1e-6;
+        }
+        prev[s] = p.world().position[foot[s]];
       }
-      if (t > 0 && p.foot_locked(s) && (prev[s] - p.world().position[upleg[s]]).norm() < 0.8) {
-        pinned += (p.world().position[foot[s]] - prev[s]).norm() < 1e-6;
-      }
-      prev[s] = p.world().position[foot[s]];
     }
+    CHECK(on_controller == checked);  // (random weights: the controllers are seldom within reach)
+    CHECK(pinned > 5);  // (random weights: the hips wander, locks out of reach are released)
   }
-  CHECK(on_controller == checked);  // (random weights: the controllers are seldom within reach)
-  CHECK(pinned > 5);  // (random weights: the hips wander, locks out of reach are released)
 }
 
 TEST_CASE("n3p calibration (§7): T-pose offsets put the devices' joints at the wrists and head") {

@@ -1,7 +1,11 @@
 // Contact post-processing (paper §3.4.1) and the IK pieces it uses.
 #include <doctest/doctest.h>
 
+#include <cmath>
+#include <random>
+
 #include "sparsebody/pose/contact.hpp"
+#include "sparsebody/pose/foot_roll.hpp"
 #include "sparsebody/pose/ik.hpp"
 #include "sparsebody/trackers/stillness.hpp"
 
@@ -505,4 +509,73 @@ TEST_CASE("foot lock: a foot caught in the air by a stop is put down to its walk
     c.update(false, Vector3d(0.5, 0.3, 0.5), hip, 1.0, 0.3, target);
   }
   CHECK(target.y() == doctest::Approx(0.19));
+}
+
+TEST_CASE("foot roll: a toe-pinned foot turns about its toe by the least angle that puts the ankle in reach") {
+  // A foot whose toe offset is 12 cm forward and 6 cm down in its frame; the foot frame yawed.
+  const Vector3d t(0, -0.06, 0.12);
+  const Vector3d toe(0.3, 0.04, -0.1);
+  const double reach = 0.8;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int rolled = 0, unreachable = 0, in_reach = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const Eigen::Quaterniond foot(Eigen::AngleAxisd(3 * u(rng), Vector3d::UnitY()) * Eigen::AngleAxisd(0.5 * u(rng), Vector3d::UnitX()));
+    const Vector3d hip = toe + Vector3d(0.4 * u(rng), 0.75 + 0.1 * u(rng), 0.4 * u(rng));
+    const double max_roll = 1.0;
+    // the ankle's elevation above the toe, measured towards the unrolled foot's heel (beyond 90 deg:
+    // the foot turned over)
+    const Vector3d back = Vector3d(-(foot * t).x(), 0, -(foot * t).z()).normalized();
+    auto elevation_of = [&](const Vector3d& ankle) { return std::atan2((ankle - toe).y(), (ankle - toe).dot(back)); };
+    const Eigen::Quaterniond r = pose::roll_foot_into_reach(foot, toe, t, hip, reach, max_roll);
+    REQUIRE(r.coeffs().allFinite());
+    const Vector3d ankle0 = toe - foot * t, ankle = toe - r * t;
+    const double angle = r.angularDistance(foot);
+    if ((hip - ankle0).norm() <= 0.999 * reach) {  // in reach already: unchanged
+      CHECK(r.coeffs() == foot.coeffs());
+      ++in_reach;
+      continue;
+    }
+    if (angle == 0.0) {  // unchanged although out of reach: no roll within max_roll reaches
+      for (double a = -max_roll; a <= max_roll; a += 0.01) {  // within the elevation bounds
+        const Vector3d lat = (foot * t).cross(Vector3d::UnitY()).normalized();
+        const Vector3d ankle_a = toe - Eigen::AngleAxisd(a, lat) * (foot * t);
+        const double elevation = elevation_of(ankle_a);
+        if (elevation < 0 || elevation > 80 * M_PI / 180) continue;
+        CHECK((hip - ankle_a).norm() > 0.999 * reach - 1e-9);
+      }
+      ++unreachable;
+      continue;
+    }
+    ++rolled;
+    CHECK((hip - ankle).norm() == doctest::Approx(0.999 * reach).epsilon(1e-9));  // just in reach
+    CHECK(angle <= max_roll + 1e-12);
+    // about the foot's lateral axis: that axis is unchanged, so the foot keeps its heading
+    const Vector3d lat0 = (foot * t).cross(Vector3d::UnitY()).normalized(), lat = (r * t).cross(Vector3d::UnitY()).normalized();
+    CHECK((lat - lat0).norm() < 1e-9);
+    // the least angle: half of it is still out of reach
+    const Eigen::Quaterniond half = foot.slerp(0.5, r);
+    CHECK((hip - (toe - half * t)).norm() > 0.999 * reach);
+    // the ankle between the toe's height and 80 deg above it
+    const double elevation = elevation_of(ankle);
+    CHECK(elevation >= -1e-9);
+    CHECK(elevation <= 80 * M_PI / 180 + 1e-9);
+  }
+  MESSAGE(rolled << " rolled, " << unreachable << " unreachable, " << in_reach << " in reach");
+  CHECK(rolled > 50);
+  CHECK(unreachable > 10);
+  CHECK(in_reach > 10);
+  // a hip right above a pinned flat foot, just beyond the leg's reach: the heel rises; behind the
+  // foot: the heel comes down (never below the toe)
+  const Eigen::Quaterniond flat = Eigen::Quaterniond::Identity();
+  const Vector3d ankle_flat = toe - flat * t;  // 6 cm above the toe, 12 cm behind it
+  const Eigen::Quaterniond up = pose::roll_foot_into_reach(flat, toe, t, ankle_flat + Vector3d(0, reach + 0.03, 0), reach, 1.0);
+  CHECK((toe - up * t).y() > ankle_flat.y() + 0.01);
+  const Eigen::Quaterniond down = pose::roll_foot_into_reach(flat, toe, t, ankle_flat + Vector3d(0, 0.05, -0.80), reach, 1.0);
+  CHECK((toe - down * t).y() < ankle_flat.y() - 1e-3);  // (the least turn: 6 mm here)
+  CHECK((toe - down * t).y() >= toe.y() - 1e-12);
+  const Eigen::Quaterniond heel_up(Eigen::AngleAxisd(-0.6, Vector3d::UnitX()));
+  // degenerate input: NaN hip or a zero-length foot leaves the foot as it is
+  CHECK(pose::roll_foot_into_reach(heel_up, toe, t, Vector3d::Constant(NAN), reach, 1.0).coeffs() == heel_up.coeffs());
+  CHECK(pose::roll_foot_into_reach(heel_up, toe, Vector3d::Zero(), toe + Vector3d(0, 1, 0), reach, 1.0).coeffs() == heel_up.coeffs());
 }

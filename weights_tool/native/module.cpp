@@ -250,7 +250,9 @@ std::unique_ptr<Pipeline> make(const std::string& path, const C& cfg) {
 }
 
 std::unique_ptr<Pipeline> create(const std::string& model, std::string weights, const std::string& storage_in, bool contact_ik,
-                                 const std::string& mode, bool controller_swap = true, const std::string& correction = "") {
+                                 const std::string& mode, bool controller_swap = true, const std::string& correction = "",
+                                 const std::string& foot_pin = "toe") {
+  if (foot_pin != "ankle" && foot_pin != "toe") throw py::value_error("foot_pin must be ankle or toe, got '" + foot_pin + "'");
   const std::string storage = resolve_storage(storage_in);
   if (mode != "streaming" && mode != "window") throw py::value_error("mode must be streaming or window, got '" + mode + "'");
   std::unique_ptr<Pipeline> p;
@@ -284,6 +286,7 @@ std::unique_ptr<Pipeline> create(const std::string& model, std::string weights, 
     if (model == "n3p") {
       avatar::N3PConfig cfg;
       cfg.foot_ik = contact_ik;  // as the demo: --no-contact-ik turns foot IK off
+      cfg.pin = foot_pin == "toe" ? avatar::N3PConfig::Pin::Toe : avatar::N3PConfig::Pin::Ankle;  // the demo's --foot-pin
       cfg.sanitizer.controller_swap.enabled = controller_swap;
       p = storage == "f16"  ? make<avatar::N3PDirectF16>(weights, cfg)
           : storage == "q8" ? make<avatar::N3PDirectQ8>(weights, cfg)
@@ -635,11 +638,12 @@ PYBIND11_MODULE(sparsebody, m) {
       .def("__repr__", [](const Pipeline& p) { return "<sparsebody.Pipeline " + p.description + ">"; });
 
   m.def("create", &create, py::arg("model"), py::arg("weights") = "", py::arg("storage") = "auto", py::arg("contact_ik") = true,
-        py::arg("mode") = "streaming", py::arg("controller_swap") = true, py::arg("correction") = "",
+        py::arg("mode") = "streaming", py::arg("controller_swap") = true, py::arg("correction") = "", py::arg("foot_pin") = "toe",
         "A pipeline: model 'lobstr', 'n3p' (direct) or 'n3p_physics'; weights '' = the shipped examples/weights; storage "
         "auto|float|f16|q8 (auto: the build's fastest, the demo's default); contact_ik as the demo's (--no-contact-ik = False); "
         "controller_swap: exchange controllers found in the other hands (trackers/controller_swap.hpp); correction: "
-        "n3p_physics only, a learned correction of the PD targets (n3p_correction_policy JSON, avatar/n3p_physics.hpp).");
+        "n3p_physics only, a learned correction of the PD targets (n3p_correction_policy JSON, avatar/n3p_physics.hpp); "
+        "foot_pin: 'toe' (default) or 'ankle', what Neural3Points direct mode pins (the demo's --foot-pin; N3PConfig::pin).");
   m.def("LoBSTr", [](const std::string& w, const std::string& s, bool ik, const std::string& mode) { return create("lobstr", w, s, ik, mode); },
         py::arg("weights") = "", py::arg("storage") = "auto", py::arg("contact_ik") = true, py::arg("mode") = "streaming");
   m.def("N3PDirect", [](const std::string& w, const std::string& s, bool ik) { return create("n3p", w, s, ik, "streaming"); },

@@ -56,6 +56,7 @@
 #include "sparsebody/pose/body_proportions.hpp"
 #include "sparsebody/pose/chain_reach.hpp"
 #include "sparsebody/pose/contact.hpp"
+#include "sparsebody/pose/foot_roll.hpp"
 #include "sparsebody/pose/ik.hpp"
 #include "sparsebody/pose/joint_map.hpp"
 #include "sparsebody/predict/n3p_predictor.hpp"
@@ -73,6 +74,27 @@ struct N3PConfig {
   bool use_controllers = true;     // false: HMD-only mode even when controllers are tracked
   double controller_max_distance = 1.5;  // from the headset (m, user's size); further: missing
   double foot_max_drift = 0.3;     // a pinned foot further than this from the prediction is released (m)
+  // Which point of a foot in contact is pinned. Toe (the default): the toe base, the ankle following
+  // the predicted foot's rotation about it (as LoBSTr's lock). Ankle: the paper's §7 pin. The
+  // contact labels the predictor learned are the toes' (toe base near the floor and slow), so a foot
+  // stays in contact through its heel-off, when the ankle rises and moves forwards over the toes:
+  // an ankle pin waits for the release, whose 8-frame blend then moves the toes at ~0.8 m/s while
+  // the real ones are still down. offdist (every 5th validation clip), ankle -> toe: foot skating
+  // nominal 13.4 -> 10.0 cm/s, device session 8.8 -> 6.8, csv 9.9 -> 8.2; feet while still 0.23 ->
+  // 0.02 / 0.42 -> 0.09 / 0.94 -> 0.79 cm/s; MPJPE 4.50 -> 4.66 / 6.40 -> 6.45 / 6.21 -> 6.31 cm.
+  // The physics mode's reference keeps the ankle pin (n3p_physics_config.hpp).
+  enum class Pin { Ankle, Toe } pin = Pin::Toe;
+  // While the user stands still, a toe-pinned foot whose ankle the leg cannot reach turns about the
+  // toe (pose/foot_roll.hpp: the heel rises as the hips settle after a stop) by up to this much
+  // (rad, ~57 deg) before the pin slides or is released. Not while moving: there a pin out of
+  // reach is a step or a jump (head_height's release) and is let go.
+  double max_foot_roll = 1.0;
+  // Toe pins: while the headset rises or falls faster than this (m/s, standard scale, over 2 frames:
+  // a jump's take-off, not a run's bob; 0.6 m/s fired at the csv sessions' dead stops and their
+  // feet while still went 0.79 -> 1.26 cm/s) and for airborne_seconds after, feet are not held as
+  // standing still (see pin_feet).
+  double airborne_speed = 1.2;
+  double airborne_seconds = 0.3;
   // While the user stands still (trackers::Stillness on the headset) pinned feet stay pinned and a
   // foot the predictor gives at least still_contact_threshold pins too: no creeping feet.
   bool hold_feet_when_still = true;
@@ -156,6 +178,10 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
         leg_[side][i] = f(leg[side][i]);
         if (arm_[side][i] < 0 || leg_[side][i] < 0) throw LoadError("n3p pipeline", "skeleton lacks an arm or leg joint");
       }
+    toe_[0] = f("Toes_L");
+    toe_[1] = f("Toes_R");
+    if (cfg_.pin == N3PConfig::Pin::Toe && (toe_[0] < 0 || toe_[1] < 0))
+      throw LoadError("n3p pipeline", "skeleton lacks a toe joint (N3PConfig::pin = Toe)");
     for (int side = 0; side < 2; ++side)
       reach_[side] = s.offsets[leg_[side][1]].norm() + s.offsets[leg_[side][2]].norm();
     head_ = f("Head");
@@ -326,7 +352,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       pose::forward_kinematics(body_, out_.pose(), out_.world());
     }
     if (cfg_.head_height && head_ >= 0) follow_head_height(o[0].p.y());
-    if (cfg_.foot_ik) pin_feet();
+    if (cfg_.foot_ik) pin_feet(o[0].p.y());
     if (cfg_.hand_ik) {
       fit_arms(o, present);
       for (int side = 0; side < 2; ++side)
@@ -413,6 +439,9 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     pred_.reset();
     lock_[0].reset();
     lock_[1].reset();
+    shown_foot_valid_[0] = shown_foot_valid_[1] = false;
+    pin_head_y_[0] = pin_head_y_[1] = std::numeric_limits<double>::quiet_NaN();
+    airborne_ = 0;
     still_.reset();
   }
 
@@ -463,7 +492,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     double m = std::numeric_limits<double>::infinity();
     for (int side = 0; side < 2; ++side) {
       if (lock_[side].state() != pose::FootLock::State::Locked) continue;
-      const Eigen::Vector3d d = out_.world().position[leg_[side][0]] - lock_[side].lock_position();  // hip - pin
+      const Eigen::Vector3d d = out_.world().position[leg_[side][0]] - ankle_pin(side);  // hip - pin
       const double r = 0.98 * reach_[side], h2 = d.x() * d.x() + d.z() * d.z();
       m = std::min(m, h2 < r * r ? std::max(0.0, std::sqrt(r * r - h2) - d.y()) : 0.0);
     }
@@ -474,23 +503,62 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   // stands still a locked foot also keeps the orientation it was planted with (the lock holds the
   // ankle, so a foot turning about it moves the toes: 1.2 cm/s of creep), eased in and out over
   // 8 frames.
-  void pin_feet() noexcept {
+  void pin_feet(double headset_y) noexcept {
+    const bool toe_pin = cfg_.pin == N3PConfig::Pin::Toe;
+    // Toe pins: the headset moving up or down fast (a jump, a drop) holds nothing for a while. The
+    // stillness detector watches horizontal motion only, so a jump from a stand is "still", and a
+    // held toe re-pinned at the top of the jump (where the network, lifted with the body, moves
+    // its foot slowly) stayed there after the landing.
+    const double vy = (headset_y - pin_head_y_[1]) * pred_.meta().frame_rate / 2;  // over the last 2 frames
+    pin_head_y_[1] = pin_head_y_[0];
+    pin_head_y_[0] = headset_y;
+    if (std::abs(vy) > cfg_.airborne_speed) airborne_ = static_cast<int>(std::lround(cfg_.airborne_seconds * pred_.meta().frame_rate));
+    else if (airborne_ > 0) --airborne_;
     for (int side = 0; side < 2; ++side) {
       const int* l = leg_[side];
       Eigen::Vector3d target;
-      const bool still = cfg_.hold_feet_when_still && still_.still();
+      const bool still = cfg_.hold_feet_when_still && still_.still() && !(toe_pin && airborne_ > 0);
       lock_[side].hold(still);
       const bool c = contact(side) || (still && contact_probability(side) > cfg_.still_contact_threshold);
       // The user just stopped: the foot stays as shown last frame (the network walks on for a step).
       if (still && still_.stopped_now()) lock_[side].stop();
-      if (lock_[side].update(c, out_.world().position[l[2]], out_.world().position[l[0]], reach_[side], cfg_.foot_max_drift,
-                             target)) {
-        lock_[side].orient(out_.world().rotation[l[2]], still);  // planted while still, eased over 8 frames
+      pose::WorldPose& w = out_.world();
+      Eigen::Quaterniond& foot_w = w.rotation[l[2]];
+      const Eigen::Vector3d& hip = w.position[l[0]];
+      Eigen::Vector3d lock_hip = hip;
+      if (toe_pin) {
+        // A toe pin is in reach when the ankle it asks for is: the lock measures it from the hip
+        // moved by the foot's toe offset, the foot as it will be shown (a held foot keeps its
+        // planted orientation, FootLock::orient: judged by the network's foot instead, a pin the
+        // legs could not reach in a jump was kept, and the feet stayed in the air after landing).
+        const Eigen::Vector3d& t = body_.offsets[toe_[side]];
+        Eigen::Quaterniond shown = still && shown_foot_valid_[side] ? shown_foot_[side] : foot_w;
+        if (still && lock_[side].state() == pose::FootLock::State::Locked)
+          shown = pose::roll_foot_into_reach(shown, lock_[side].lock_position(), t, hip, reach_[side], cfg_.max_foot_roll);
+        lock_hip += shown * t;
+      }
+      if (lock_[side].update(c, w.position[toe_pin ? toe_[side] : l[2]], lock_hip, reach_[side], cfg_.foot_max_drift, target)) {
+        lock_[side].orient(foot_w, still);  // planted while still, eased over 8 frames
+        if (toe_pin) {  // the ankle, the foot turning about the toe
+          const Eigen::Vector3d& t = body_.offsets[toe_[side]];
+          if (still) foot_w = pose::roll_foot_into_reach(foot_w, target, t, hip, reach_[side], cfg_.max_foot_roll);
+          target -= foot_w * t;
+        }
         put_limb(l, target);
         pose::forward_kinematics(body_, out_.pose(), out_.world());
       }
       lock_[side].show(out_.world().rotation[l[2]]);
+      shown_foot_[side] = out_.world().rotation[l[2]];
+      shown_foot_valid_[side] = true;
     }
+  }
+  // Where a pinned foot's ankle is: the pin itself, or the toe pin less the foot's toe offset, the
+  // foot as last shown (planted while the user stands; the network's foot may be heel-up).
+  Eigen::Vector3d ankle_pin(int side) const noexcept {
+    const Eigen::Vector3d& p = lock_[side].lock_position();
+    if (cfg_.pin != N3PConfig::Pin::Toe) return p;
+    const Eigen::Quaterniond& foot = shown_foot_valid_[side] ? shown_foot_[side] : out_.world().rotation[leg_[side][2]];
+    return p - foot * body_.offsets[toe_[side]];
   }
 
   // Two-bone IK on the chain j[0] -> j[1] -> j[2] (pose::limb_to, bent in its current plane, the
@@ -526,6 +594,11 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   features::n3p::TrackerSet trackers_{};
   std::array<bool, 3> present_{};
   int arm_[2][3] = {}, leg_[2][3] = {};
+  int toe_[2] = {-1, -1};
+  Eigen::Quaterniond shown_foot_[2] = {Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};  // last output's foot rotations
+  bool shown_foot_valid_[2] = {false, false};
+  double pin_head_y_[2] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};  // the headset's last heights (pin_feet)
+  int airborne_ = 0;  // frames left without the hold (toe pins after fast vertical head motion)
   int head_ = -1;
   pose::ChainReach spine_;
   double reach_[2] = {};

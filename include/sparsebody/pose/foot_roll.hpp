@@ -1,0 +1,60 @@
+// A foot pinned at its toe base that the leg cannot reach: turn it about the toe.
+//
+// A toe pin (Neural3Points direct mode's N3PConfig::Pin::Toe) puts the ankle at
+//   ankle = toe - R t        (R: the foot joint's world rotation, t: the toe's offset in the foot frame)
+// so the ankle lies on a circle of radius |t| about the pinned toe. When the hip has moved so far
+// that the ankle R asks for is beyond the leg's reach, a real foot rolls over its toe: the heel
+// rises when the hip is above or ahead of the foot (a leg straightening over it, a trailing leg at
+// the end of its stance), the heel comes down when the hip is behind it. roll_foot_into_reach turns R about the
+// foot's lateral axis through the toe by the least angle that brings the ankle within reach, the
+// ankle's elevation above the toe kept within [0, 80 deg]:
+//   ankle(theta) = toe + r (cos(theta) u1 + sin(theta) u2),  u1 = (toe -> ankle) / r,  u2 = a x u1,
+//   |hip - ankle(theta)|^2 = |q|^2 + r^2 - 2 r (q . u(theta)),  q = hip - toe,
+// so the ankle is in reach where q . u(theta) = |q_plane| cos(theta - phi) >= k,
+// k = (|q|^2 + r^2 - reach^2) / (2 r): an interval of theta about phi, whose point nearest 0 is taken.
+// Without the roll, such a pin slid or was released and its toe slid with it. The direct mode rolls
+// only feet held while the user stands still (avatar/n3p_direct.hpp).
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace sparsebody::pose {
+
+// `foot` turned about its lateral axis through `toe` so that its ankle (toe - foot * t) is within
+// 0.999 `reach` of `hip`; unchanged when it is in reach already, when no turn of at most `max_roll`
+// radians within the elevation bounds reaches, or for a degenerate (vertical or zero-length) foot.
+// Never non-finite for finite input.
+inline Eigen::Quaterniond roll_foot_into_reach(const Eigen::Quaterniond& foot, const Eigen::Vector3d& toe,
+                                               const Eigen::Vector3d& t, const Eigen::Vector3d& hip, double reach,
+                                               double max_roll) noexcept {
+  const Eigen::Vector3d e = -(foot * t);  // toe -> ankle
+  const Eigen::Vector3d q = hip - toe;
+  const double r = e.norm(), want = 0.999 * reach;
+  if (!((q - e).norm() > want) || !(r > 1e-9)) return foot;
+  Eigen::Vector3d a = e.cross(Eigen::Vector3d::UnitY());  // the foot's lateral axis (horizontal)
+  if (!(a.norm() > 1e-9 * r)) return foot;
+  a.normalize();
+  const Eigen::Vector3d u1 = e / r, u2 = a.cross(u1);
+  const double p1 = q.dot(u1), p2 = q.dot(u2), pv = std::hypot(p1, p2);
+  const double k = (q.squaredNorm() + r * r - want * want) / (2 * r);
+  if (!(k < pv)) return foot;  // beyond reach whatever the roll
+  const double phi = std::atan2(p2, p1), alpha = std::acos(std::max(-1.0, k / pv));
+  // theta > 0 raises the ankle (heel up): the ankle's elevation above the toe, beta + theta, stays
+  // within [0, 80 deg] (a heel below its toe, or a foot turned over, is no foot)
+  const double beta = std::asin(std::clamp(e.y() / r, -1.0, 1.0));
+  // theta - phi within [-alpha, alpha] modulo 2 pi: the interval and its neighbours a turn away
+  double theta = std::numeric_limits<double>::infinity();
+  for (int turn = -1; turn <= 1; ++turn) {
+    const double c = phi + 2 * M_PI * turn;
+    const double lo = std::max({c - alpha, -max_roll, -beta}), hi = std::min({c + alpha, max_roll, 1.3962634015954636 - beta});
+    if (lo <= hi && std::abs(std::clamp(0.0, lo, hi)) < std::abs(theta)) theta = std::clamp(0.0, lo, hi);
+  }
+  if (!std::isfinite(theta)) return foot;
+  return (Eigen::AngleAxisd(theta, a) * foot).normalized();
+}
+
+}  // namespace sparsebody::pose
