@@ -413,3 +413,14 @@ def test_one_batch_at_a_time_per_pipeline(sb):
     ref = sb.create("n3p_physics").run(*args)  # the probing changed nothing
     assert all(same(result["out"][k], ref[k]) for k in ref)
     assert result["out"]["has_output"].sum() > 3 * n
+
+
+def test_foot_pin(sb):
+    """foot_pin: 'toe' (the default) or 'ankle' give different feet; anything else is a ValueError."""
+    need_clip()
+    toe = pymod.run_clip(sb, CLIP, model="n3p", no_pelvis=True)
+    ankle = pymod.run_clip(sb, CLIP, model="n3p", no_pelvis=True, **pymod.demo_options(["--foot-pin", "ankle"]))
+    assert toe.out["position"].shape == ankle.out["position"].shape
+    assert not np.array_equal(toe.out["position"], ankle.out["position"])
+    with pytest.raises(ValueError, match="foot_pin must be ankle or toe, got 'heel'"):
+        sb.create("n3p", foot_pin="heel")
