@@ -15,8 +15,8 @@ else()
 endif()
 
 # RBDL: a peer to time against, never part of the project (see ../shared/peers/README.md). Built
-# with the flags of this build (Release, -march=native when SPARSEBODY_NATIVE) so both sides get
-# the same compiler treatment.
+# with the flags of this build (Release and its -march: SPARSEBODY_MARCH, or native when
+# SPARSEBODY_NATIVE) so both sides get the same compiler treatment.
 set(SPARSEBODY_RBDL_TARBALL ${PROJECT_SOURCE_DIR}/../shared/peers/rbdl-3.3.1-src.tar.gz)
 if(EXISTS ${SPARSEBODY_RBDL_TARBALL})
   set(_sparsebody_rbdl_default ON)
@@ -30,10 +30,7 @@ if(SPARSEBODY_BENCH_RBDL AND NOT EXISTS ${SPARSEBODY_RBDL_TARBALL})
 elseif(SPARSEBODY_BENCH_RBDL)
   include(ExternalProject)
   set(_rbdl_dir ${CMAKE_CURRENT_BINARY_DIR}/rbdl)
-  set(_rbdl_flags "")
-  if(SPARSEBODY_NATIVE)
-    set(_rbdl_flags -march=native)
-  endif()
+  set(_rbdl_flags "${_sparsebody_march}")  # the build's ISA (CMakeLists.txt), e.g. -march=x86-64-v3
   set(_rbdl_timestamp)
   if(CMAKE_VERSION VERSION_GREATER_EQUAL 3.24)
     set(_rbdl_timestamp DOWNLOAD_EXTRACT_TIMESTAMP TRUE)

@@ -124,3 +124,67 @@ TEST_CASE("n3p batch: a batch step allocates nothing") {
   }
   for (int u = 0; u < n; ++u) CHECK(crowd[u].has_output());
 }
+
+// Toe pins while the user stands (N3PConfig::Pin::Toe, pose/foot_roll.hpp): the headset drifts
+// forwards 10 cm at 4 cm/s (still by trackers::Stillness) and the hips follow it, so a planted rear
+// foot's ankle leaves the leg's reach and the foot rolls over its toe. That branch allocates nothing
+// either. The test checks that it ran: the foot turned while its toe stayed, and without the roll
+// (max_foot_roll = 0) the toe slides.
+TEST_CASE("n3p pipeline: no allocation per frame while a standing foot rolls over its pinned toe, shipped weights") {
+  using sparsebody_test::Phase;
+  auto frames = sparsebody_test::session({{Phase::Walk, 2.0, 1.62}, {Phase::Stand, 4.0, 1.62}}, 72.0, 0.3, false);
+  const Eigen::Vector3d fwd = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY())) * Eigen::Vector3d(0, 0, -1);
+  for (auto& f : frames) {
+    const double s = 0.04 * std::clamp(f.time - 3.0, 0.0, 2.5);  // m forwards, t = 3-5.5 s
+    for (auto& pose : f.pose) {
+      pose.position.x += static_cast<float>(s * fwd.x());
+      pose.position.z += static_cast<float>(s * fwd.z());
+    }
+  }
+  const auto w = avatar::N3PDirect::load(std::string(SPARSEBODY_SOURCE_DIR) + "/examples/weights/n3p");
+  auto run = [&](double max_roll, double* toe_moved, long long* allocations) {
+    avatar::N3PConfig c;
+    c.max_foot_roll = max_roll;
+    avatar::N3PDirect p(w, c);
+    REQUIRE(p.config().pin == avatar::N3PConfig::Pin::Toe);
+    const int toe[2] = {p.joint_map()[pose::Role::ToeL], p.joint_map()[pose::Role::ToeR]};
+    const int foot[2] = {p.joint_map()[pose::Role::FootL], p.joint_map()[pose::Role::FootR]};
+    for (int i = 0; i < 3; ++i) p.push(frames[static_cast<std::size_t>(i)]);
+    Eigen::Quaterniond planted[2];
+    Eigen::Vector3d toe_at[2];
+    double turned = 0;
+    *toe_moved = 0;
+    {
+      sparsebody_test::AllocationCounter counter;
+      for (std::size_t i = 3; i < frames.size(); ++i) {
+        if (p.push(frames[i]) == 0 || !p.has_output()) continue;
+        for (int k = 0; k < 2; ++k) {
+          const Eigen::Quaterniond q = p.world().rotation[foot[k]];
+          const Eigen::Vector3d x = p.world().position[toe[k]] * p.user_scale();
+          if (frames[i].time < 2.9) {  // standing since t = 2 s, before the drift
+            planted[k] = q;
+            toe_at[k] = x;
+            continue;
+          }
+          turned = std::max(turned, planted[k].angularDistance(q));
+          *toe_moved = std::max(*toe_moved, std::hypot(x.x() - toe_at[k].x(), x.z() - toe_at[k].z()));
+        }
+      }
+      *allocations = counter.count();
+    }
+    return turned;
+  };
+  double toe_rolled = 0, toe_fixed = 0;
+  long long n_rolled = 0, n_fixed = 0;
+  const double turned = run(avatar::N3PConfig{}.max_foot_roll, &toe_rolled, &n_rolled);
+  const double turned_fixed = run(0.0, &toe_fixed, &n_fixed);
+  MESSAGE("standing, headset 10 cm forwards at 4 cm/s: feet turned up to " << turned * 180 / M_PI << " deg, toes moved up to "
+                                                                           << 100 * toe_rolled << " cm (without the roll: "
+                                                                           << turned_fixed * 180 / M_PI << " deg, "
+                                                                           << 100 * toe_fixed << " cm)");
+  CHECK(n_rolled == 0);
+  CHECK(n_fixed == 0);
+  CHECK(turned > 0.05);         // the roll ran (about 3 deg or more) ...
+  CHECK(toe_rolled < 1e-5);      // ... about the pinned toe
+  CHECK(toe_fixed > 0.0002);    // without it the hip drags the toe (0.4 mm: the roll raises the heel ~8 mm)
+}
