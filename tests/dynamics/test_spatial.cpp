@@ -2,6 +2,7 @@
 #include <doctest/doctest.h>
 
 #include <cstdio>
+#include <limits>
 #include <random>
 
 #include "sparsebody/dynamics/spatial.hpp"
@@ -27,6 +28,20 @@ TEST_CASE("spatial: transforms and inertia shifts match the 6x6 matrices") {
     Mat6<double> out = Mat6<double>::Zero();
     add_transformed_inertia(X, I, out);
     CHECK((out - Xm.transpose() * I * Xm).norm() < 1e-10 * I.norm());
+    // the lower-triangle kernel (ABA's pass 2): reads only I's lower triangle (NaN above it here),
+    // adds only to out's lower triangle (NaN above it stays NaN, nothing else does)
+    Mat6<double> I_low = I, acc = Mat6<double>::Random();
+    Mat6<double> acc_low = acc;
+    for (int c = 0; c < 6; ++c)
+      for (int r = 0; r < c; ++r) I_low(r, c) = acc_low(r, c) = std::numeric_limits<double>::quiet_NaN();
+    add_transformed_inertia_lower(X, I_low, acc_low);
+    const Mat6<double> want = acc + Xm.transpose() * I * Xm;
+    for (int c = 0; c < 6; ++c)
+      for (int r = 0; r < 6; ++r) {
+        if (r >= c) CHECK(std::abs(acc_low(r, c) - want(r, c)) < 1e-10 * I.norm());
+        else CHECK(std::isnan(acc_low(r, c)));
+      }
+    CHECK((mul6v_lower(I_low, m) - I * m).norm() < 1e-12 * I.norm() * m.norm());
     // composition
     Transform<double> Y;
     Y.E = Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized().toRotationMatrix();

@@ -30,7 +30,14 @@ namespace sparsebody::dynamics {
 // p_i = v_i x* I_i v_i, the velocity-product force of each body (needs v_i from forward_kinematics).
 template <class S, int MB, int MD>
 inline void velocity_product_forces(const Model<S, MB, MD>& m, Data<S, MB, MD>& d) {
-  for (int i = 0; i < m.nb; ++i) d.bias[i] = cross_force(d.v[i], mul6v(m.bodies[i].I, d.v[i]));
+  for (int i = 0; i < m.nb; ++i) {
+    S v[6], h[6], p[6];
+    SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) v[r] = d.v[i](r);
+    mul_rigid_inertia(m.bodies[i].I, v, h);
+    cross_force(v, h, p);
+    Vec6<S>& bias = d.bias[i];
+    SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) bias(r) = p[r];
+  }
 }
 
 // X_i, v_i, c_i (forward_kinematics; world poses only when asked) and p_i.
@@ -52,43 +59,64 @@ SPARSEBODY_INLINE bool free_root_articulated(const Body<S>& b, int i, Data<S, MB
   Mat6<S> D = d.IA[i];
   for (int r = 0; r < 6; ++r) D(r, r) += d.implicit_diagonal(b.v_index + r);
   d.u[i].setZero();
-  return cholesky_factor6(D, d.root_L);
+  return cholesky_factor6(D, d.root_L, d.root_L_inv_diag);
 }
 
 // Spherical, S = [1_3; 0]: U = I^A S is the first three columns of I^A (read in place, in pass 3
-// too: I^A_i is final once body i is reached), D the top-left 3x3 block of I^A plus diag(k).
+// too: I^A_i is final once body i is reached), D the top-left 3x3 block of I^A plus K = diag(k).
+// With A that block, U = [A; B^T] and D = A + K, the Schur complement I^a = I^A - U D^-1 U^T is
+// computed as
+//   I^a_AA = K - K D^-1 K,  I^a_AB = K G,  I^a_BB = C - B^T G,  G = D^-1 B,
+// (A D^-1 = 1 - K D^-1), and U D^-1 u = [u - K z; G^T u], z = D^-1 u: 40 % fewer products than
+// forming U D^-1, and no cancellation in I^a_AA (A - A D^-1 A is the difference of two near-equal
+// matrices when K is small).
 template <class S, int MB, int MD>
 SPARSEBODY_INLINE bool spherical_articulated(const Body<S>& b, int i, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
                                   Mat6<S>& Ia, Vec6<S>& pa) {
-  const Mat6<S>& IA = d.IA[i];
+  const Mat6<S>& IA = d.IA[i];  // lower triangle (aba_backward_pass)
   const Vec6<S>& pA = d.pA[i];
   const int k = b.v_index;
-  Mat3<S> D;
+  const S kk[3] = {d.implicit_diagonal(k) + b.armature, d.implicit_diagonal(k + 1) + b.armature,
+                   d.implicit_diagonal(k + 2) + b.armature};
+  // D^-1 by cofactors (inverse_sym3, written out so that it stays in registers)
+  const S d00 = IA(0, 0) + kk[0], d10 = IA(1, 0), d20 = IA(2, 0), d11 = IA(1, 1) + kk[1], d21 = IA(2, 1), d22 = IA(2, 2) + kk[2];
+  const S c00 = d11 * d22 - d21 * d21, c10 = d20 * d21 - d10 * d22, c20 = d10 * d21 - d20 * d11;
+  const S inv = S(1) / (d00 * c00 + d10 * c10 + d20 * c20);
+  S Di[3][3];
+  Di[0][0] = c00 * inv;
+  Di[1][0] = Di[0][1] = c10 * inv;
+  Di[2][0] = Di[0][2] = c20 * inv;
+  Di[1][1] = (d00 * d22 - d20 * d20) * inv;
+  Di[2][1] = Di[1][2] = (d10 * d20 - d00 * d21) * inv;
+  Di[2][2] = (d00 * d11 - d10 * d10) * inv;
+  Mat3<S>& Dinv = d.Dinv[i];
   SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c)
-    SPARSEBODY_UNROLL for (int r = 0; r < 3; ++r) D(r, c) = IA(r, c);
-  D(0, 0) += d.implicit_diagonal(k) + b.armature;
-  D(1, 1) += d.implicit_diagonal(k + 1) + b.armature;
-  D(2, 2) += d.implicit_diagonal(k + 2) + b.armature;
-  const Mat3<S> Dinv = inverse_sym3(D);
-  d.Dinv[i] = Dinv;
-  const bool ok = D(0, 0) > S(0) && Dinv.allFinite();
-  const S u0 = tau(k) - pA(0), u1 = tau(k + 1) - pA(1), u2 = tau(k + 2) - pA(2);  // u = tau - S^T p^A
-  d.u[i] = Vec3<S>(u0, u1, u2);
+    SPARSEBODY_UNROLL for (int r = 0; r < 3; ++r) Dinv(r, c) = Di[r][c];
+  const bool ok = d00 > S(0) && std::isfinite(inv) && inv > S(0);  // a positive pivot and determinant
+  const S u[3] = {tau(k) - pA(0), tau(k + 1) - pA(1), tau(k + 2) - pA(2)};  // u = tau - S^T p^A
+  d.u[i] = Vec3<S>(u[0], u[1], u[2]);
   if (b.parent < 0) return ok;
-  // I^a = I^A - U D^-1 U^T, symmetric: lower triangle, mirrored; p^a = p^A + I^a c + U D^-1 u.
-  S UD[6][3];  // U D^-1
-  SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r)
-    SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c)
-      UD[r][c] = IA(r, 0) * Dinv(0, c) + IA(r, 1) * Dinv(1, c) + IA(r, 2) * Dinv(2, c);
-  SPARSEBODY_UNROLL for (int c = 0; c < 6; ++c)
-    SPARSEBODY_UNROLL for (int r = c; r < 6; ++r) {
-      const S v = IA(r, c) - (UD[r][0] * IA(c, 0) + UD[r][1] * IA(c, 1) + UD[r][2] * IA(c, 2));
-      Ia(r, c) = v;
-      Ia(c, r) = v;
+  S G[3][3];  // D^-1 B, B(r, c) = I^A(r, 3 + c) = IA(3 + c, r)
+  SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c)
+    SPARSEBODY_UNROLL for (int r = 0; r < 3; ++r) G[r][c] = Di[r][0] * IA(3 + c, 0) + Di[r][1] * IA(3 + c, 1) + Di[r][2] * IA(3 + c, 2);
+  // I^a, lower triangle only (add_transformed_inertia_lower reads no more)
+  SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c) {
+    SPARSEBODY_UNROLL for (int r = 0; r < 3; ++r) {
+      if (r >= c) {
+        Ia(r, c) = (r == c ? kk[r] : S(0)) - kk[r] * kk[c] * Di[r][c];
+        Ia(3 + r, 3 + c) = sym_lower(IA, 3 + r, 3 + c) - (IA(3 + r, 0) * G[0][c] + IA(3 + r, 1) * G[1][c] + IA(3 + r, 2) * G[2][c]);
+      }
+      Ia(3 + c, r) = kk[r] * G[r][c];  // (K G)(r, c), stored transposed below the diagonal
     }
-  const Vec6<S> Iac = mul6v(Ia, d.c[i]);
-  SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r)
-    pa(r) = pA(r) + Iac(r) + (UD[r][0] * u0 + UD[r][1] * u1 + UD[r][2] * u2);
+  }
+  // p^a = p^A + I^a c + U D^-1 u
+  const S z[3] = {Di[0][0] * u[0] + Di[0][1] * u[1] + Di[0][2] * u[2], Di[1][0] * u[0] + Di[1][1] * u[1] + Di[1][2] * u[2],
+                  Di[2][0] * u[0] + Di[2][1] * u[1] + Di[2][2] * u[2]};
+  const Vec6<S> Iac = mul6v_lower(Ia, d.c[i]);
+  SPARSEBODY_UNROLL for (int r = 0; r < 3; ++r) {
+    pa(r) = pA(r) + Iac(r) + (u[r] - kk[r] * z[r]);
+    pa(3 + r) = pA(3 + r) + Iac(3 + r) + (G[0][r] * u[0] + G[1][r] * u[1] + G[2][r] * u[2]);
+  }
   return ok;
 }
 
@@ -96,29 +124,27 @@ SPARSEBODY_INLINE bool spherical_articulated(const Body<S>& b, int i, Data<S, MB
 template <class S, int MB, int MD>
 SPARSEBODY_INLINE bool revolute_articulated(const Body<S>& b, int i, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
                                  Mat6<S>& Ia, Vec6<S>& pa) {
-  const Mat6<S>& IA = d.IA[i];
+  const Mat6<S>& IA = d.IA[i];  // lower triangle (aba_backward_pass)
   const Vec6<S>& pA = d.pA[i];
   const S ax = b.axis.x(), ay = b.axis.y(), az = b.axis.z();
   S Uc[6];
-  for (int r = 0; r < 6; ++r) Uc[r] = IA(r, 0) * ax + IA(r, 1) * ay + IA(r, 2) * az;
+  SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r)
+    Uc[r] = sym_lower(IA, r, 0) * ax + sym_lower(IA, r, 1) * ay + sym_lower(IA, r, 2) * az;
   const S D = ax * Uc[0] + ay * Uc[1] + az * Uc[2] + d.implicit_diagonal(b.v_index) + b.armature;
   const bool ok = D > S(0);
   const S Dinv = S(1) / D;
-  for (int r = 0; r < 6; ++r) d.U[i](r, 0) = Uc[r];
+  SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) d.U[i](r, 0) = Uc[r];
   d.Dinv[i](0, 0) = Dinv;
   const S u = tau(b.v_index) - (ax * pA(0) + ay * pA(1) + az * pA(2));
   d.u[i](0) = u;
   if (b.parent < 0) return ok;
   S UD[6];  // U D^-1
-  for (int r = 0; r < 6; ++r) UD[r] = Uc[r] * Dinv;
-  SPARSEBODY_UNROLL for (int c = 0; c < 6; ++c)
-    SPARSEBODY_UNROLL for (int r = c; r < 6; ++r) {
-      const S v = IA(r, c) - UD[r] * Uc[c];
-      Ia(r, c) = v;
-      Ia(c, r) = v;
-    }
-  const Vec6<S> Iac = mul6v(Ia, d.c[i]);
-  for (int r = 0; r < 6; ++r) pa(r) = pA(r) + Iac(r) + UD[r] * u;
+  SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) UD[r] = Uc[r] * Dinv;
+  SPARSEBODY_UNROLL for (int c = 0; c < 6; ++c)  // I^a = I^A - U D^-1 U^T, lower triangle
+    SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r)
+      if (r >= c) Ia(r, c) = IA(r, c) - UD[r] * Uc[c];
+  const Vec6<S> Iac = mul6v_lower(Ia, d.c[i]);
+  SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) pa(r) = pA(r) + Iac(r) + UD[r] * u;
   return ok;
 }
 
@@ -126,10 +152,12 @@ SPARSEBODY_INLINE bool revolute_articulated(const Body<S>& b, int i, Data<S, MB,
 template <class S, int MB, int MD>
 SPARSEBODY_INLINE void fixed_articulated(int i, const Data<S, MB, MD>& d, Mat6<S>& Ia, Vec6<S>& pa) {
   Ia = d.IA[i];
-  pa = d.pA[i] + mul6v(d.IA[i], d.c[i]);
+  pa = d.pA[i] + mul6v_lower(d.IA[i], d.c[i]);
 }
 
-// Pass 2: I^A_i and p^A_i from the leaves to the root, after pass 1 (p_i in d.bias).
+// Pass 2: I^A_i and p^A_i from the leaves to the root, after pass 1 (p_i in d.bias). I^A and I^a
+// are symmetric and kept in their lower triangles only (add_transformed_inertia_lower): the upper
+// triangles of d.IA are not updated and must not be read.
 template <class S, int MB, int MD>
 inline bool aba_backward_pass(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau) {
   for (int i = 0; i < m.nb; ++i) {
@@ -155,68 +183,85 @@ inline bool aba_backward_pass(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, con
         break;
     }
     if (b.parent < 0) continue;
-    add_transformed_inertia(d.X[i], Ia, d.IA[b.parent]);  // I^A_lambda += X^T I^a X
-    d.pA[b.parent] += d.X[i].apply_transpose_force(pa);    // p^A_lambda += X^T p^a
+    add_transformed_inertia_lower(d.X[i], Ia, d.IA[b.parent]);  // I^A_lambda += X^T I^a X
+    S pv[6], o[6];  // p^A_lambda += X^T p^a
+    SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) pv[r] = pa(r);
+    d.X[i].apply_transpose_force(pv, o);
+    Vec6<S>& pA = d.pA[b.parent];
+    SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) pA(r) += o[r];
   }
   return ok;
 }
 
 // ---- pass 3, one function per joint type -----------------------------------------------------------
-// Each takes a'_i, writes qdd_i and returns a_i in ap.
+// Each takes a'_i in ap[6], writes qdd_i and leaves a_i in ap. The spatial vectors of this pass are
+// plain scalars: built in an Eigen Vec6 on the stack by scalar stores and read back by packed
+// loads, they stalled on store forwarding (27 % of the pass).
 
 // Free root: a = (I^A + diag(k))^-1 (tau - p^A + diag(k) a'), qdd = a - a'.
 template <class S, int MB, int MD>
 SPARSEBODY_INLINE void free_root_acceleration(const Body<S>& b, int i, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
-                                   Vec6<S>& ap, typename Model<S, MB, MD>::VecV& qdd) {
+                                   S* ap, typename Model<S, MB, MD>::VecV& qdd) {
   const int k = b.v_index;
   Vec6<S> x;
-  for (int r = 0; r < 6; ++r) x(r) = tau(k + r) - d.pA[i](r) + d.implicit_diagonal(k + r) * ap(r);
-  cholesky_solve6(d.root_L, x);
-  for (int r = 0; r < 6; ++r) qdd(k + r) = x(r) - ap(r);
-  ap = x;
+  SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) x(r) = tau(k + r) - d.pA[i](r) + d.implicit_diagonal(k + r) * ap[r];
+  cholesky_solve6(d.root_L, d.root_L_inv_diag, x);
+  SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) {
+    qdd(k + r) = x(r) - ap[r];
+    ap[r] = x(r);
+  }
 }
 
 // Spherical: qdd = D^-1 (u - U^T a') with U the first three columns of I^A; a = a' + [qdd; 0].
 template <class S, int MB, int MD>
-SPARSEBODY_INLINE void spherical_acceleration(const Body<S>& b, int i, const Data<S, MB, MD>& d, Vec6<S>& ap,
+SPARSEBODY_INLINE void spherical_acceleration(const Body<S>& b, int i, const Data<S, MB, MD>& d, S* ap,
                                    typename Model<S, MB, MD>::VecV& qdd) {
-  const Mat6<S>& U = d.IA[i];
+  const Mat6<S>& U = d.IA[i];  // lower triangle
   const Mat3<S>& Dinv = d.Dinv[i];
   S y[3];  // u - U^T a'
-  for (int c = 0; c < 3; ++c)
-    y[c] = d.u[i](c) - (U(0, c) * ap(0) + U(1, c) * ap(1) + U(2, c) * ap(2) + U(3, c) * ap(3) + U(4, c) * ap(4) +
-                        U(5, c) * ap(5));
-  for (int r = 0; r < 3; ++r) {
+  SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c)
+    y[c] = d.u[i](c) - ((sym_lower(U, 0, c) * ap[0] + sym_lower(U, 1, c) * ap[1]) + (sym_lower(U, 2, c) * ap[2] + U(3, c) * ap[3]) +
+                        (U(4, c) * ap[4] + U(5, c) * ap[5]));
+  SPARSEBODY_UNROLL for (int r = 0; r < 3; ++r) {
     const S x = Dinv(r, 0) * y[0] + Dinv(r, 1) * y[1] + Dinv(r, 2) * y[2];
     qdd(b.v_index + r) = x;
-    ap(r) += x;
+    ap[r] += x;
   }
 }
 
 // Revolute: qdd = D^-1 (u - U^T a'); a = a' + [axis qdd; 0].
 template <class S, int MB, int MD>
-SPARSEBODY_INLINE void revolute_acceleration(const Body<S>& b, int i, const Data<S, MB, MD>& d, Vec6<S>& ap,
+SPARSEBODY_INLINE void revolute_acceleration(const Body<S>& b, int i, const Data<S, MB, MD>& d, S* ap,
                                   typename Model<S, MB, MD>::VecV& qdd) {
   const Mat63<S>& U = d.U[i];
-  const S x = d.Dinv[i](0, 0) * (d.u[i](0) - (U(0, 0) * ap(0) + U(1, 0) * ap(1) + U(2, 0) * ap(2) + U(3, 0) * ap(3) +
-                                              U(4, 0) * ap(4) + U(5, 0) * ap(5)));
+  const S x = d.Dinv[i](0, 0) * (d.u[i](0) - ((U(0, 0) * ap[0] + U(1, 0) * ap[1]) + (U(2, 0) * ap[2] + U(3, 0) * ap[3]) +
+                                              (U(4, 0) * ap[4] + U(5, 0) * ap[5])));
   qdd(b.v_index) = x;
-  ap(0) += b.axis.x() * x;
-  ap(1) += b.axis.y() * x;
-  ap(2) += b.axis.z() * x;
+  ap[0] += b.axis.x() * x;
+  ap[1] += b.axis.y() * x;
+  ap[2] += b.axis.z() * x;
 }
 
 // Pass 3: a_i and qdd from the root to the leaves, after pass 2.
 template <class S, int MB, int MD>
 inline void aba_acceleration_pass(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
                                   typename Model<S, MB, MD>::VecV& qdd) {
-  Vec6<S> a0 = Vec6<S>::Zero();
-  a0.template tail<3>() = -m.gravity;
   qdd.resize(m.nv);
   for (int i = 0; i < m.nb; ++i) {
     const Body<S>& b = m.bodies[i];
-    Vec6<S> ap = d.X[i].apply(b.parent < 0 ? a0 : d.a[b.parent]);  // a'_i = X_i a_lambda + c_i
-    for (int r = 0; r < 6; ++r) ap(r) += d.c[i](r);
+    S in[6];  // a_lambda (a_0 = -g at the root)
+    if (b.parent < 0) {
+      in[0] = in[1] = in[2] = S(0);
+      in[3] = -m.gravity.x();
+      in[4] = -m.gravity.y();
+      in[5] = -m.gravity.z();
+    } else {
+      const Vec6<S>& a = d.a[b.parent];
+      SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) in[r] = a(r);
+    }
+    S ap[6];  // a'_i = X_i a_lambda + c_i
+    d.X[i].apply(in, ap);
+    SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) ap[r] += d.c[i](r);
     switch (b.joint) {
       case JointType::Free: free_root_acceleration(b, i, d, tau, ap, qdd); break;
       case JointType::Spherical: spherical_acceleration(b, i, d, ap, qdd); break;
@@ -224,7 +269,8 @@ inline void aba_acceleration_pass(const Model<S, MB, MD>& m, Data<S, MB, MD>& d,
       case JointType::Fixed:
       default: break;
     }
-    d.a[i] = ap;
+    Vec6<S>& a = d.a[i];
+    SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) a(r) = ap[r];
   }
 }
 

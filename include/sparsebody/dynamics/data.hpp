@@ -20,12 +20,13 @@ struct Data {
   std::array<Vec6<S>, MaxBodies> a{};           // spatial acceleration (gravity included, a_0 = -g)
   std::array<Vec6<S>, MaxBodies> f{};           // RNEA body force
   std::array<Vec6<S>, MaxBodies> bias{};        // v x* I v
-  std::array<Mat6<S>, MaxBodies> IA{};          // articulated inertia I^A
+  std::array<Mat6<S>, MaxBodies> IA{};          // articulated inertia I^A (ABA keeps its lower triangle only)
   std::array<Vec6<S>, MaxBodies> pA{};          // articulated bias force p^A
   std::array<Mat63<S>, MaxBodies> U{};          // U_i = I^A_i S_i (revolute: column 0; spherical: read from IA)
   std::array<Mat3<S>, MaxBodies> Dinv{};        // D_i^-1, D_i = S_i^T I^A_i S_i + diag(implicit_diagonal_i)
   std::array<Vec3<S>, MaxBodies> u{};           // u_i = tau_i - S_i^T p^A_i
   Mat6<S> root_L{};                             // Cholesky factor (lower) of the free root's I^A
+  Vec6<S> root_L_inv_diag{};                    // 1 / diag(root_L)
   // External loads per body (body coordinates), filled by contact: a force f_ext and an
   // acceleration-dependent part -K_ext a (linearly implicit contact), i.e. an added inertia K_ext.
   std::array<Vec6<S>, MaxBodies> fext{};

@@ -62,6 +62,19 @@ struct Transform {
     out(5) = E(2, 0) * ux + E(2, 1) * uy + E(2, 2) * uz;
     return out;
   }
+  // The same on plain arrays (m and out distinct), for passes that keep vectors in scalars.
+  SPARSEBODY_INLINE void apply(const S* m, S* out) const {
+    const S wx = m[0], wy = m[1], wz = m[2];
+    const S ux = m[3] - (r.y() * wz - r.z() * wy);
+    const S uy = m[4] - (r.z() * wx - r.x() * wz);
+    const S uz = m[5] - (r.x() * wy - r.y() * wx);
+    out[0] = E(0, 0) * wx + E(0, 1) * wy + E(0, 2) * wz;
+    out[1] = E(1, 0) * wx + E(1, 1) * wy + E(1, 2) * wz;
+    out[2] = E(2, 0) * wx + E(2, 1) * wy + E(2, 2) * wz;
+    out[3] = E(0, 0) * ux + E(0, 1) * uy + E(0, 2) * uz;
+    out[4] = E(1, 0) * ux + E(1, 1) * uy + E(1, 2) * uz;
+    out[5] = E(2, 0) * ux + E(2, 1) * uy + E(2, 2) * uz;
+  }
   // m_A = X^-1 m_B (motion vectors, child to parent).
   SPARSEBODY_INLINE Vec6<S> apply_inverse(const Vec6<S>& m) const {
     Vec6<S> out;
@@ -85,6 +98,16 @@ struct Transform {
     out(1) += r.z() * out(3) - r.x() * out(5);
     out(2) += r.x() * out(4) - r.y() * out(3);
     return out;
+  }
+  // The same on plain arrays (f and out distinct).
+  SPARSEBODY_INLINE void apply_transpose_force(const S* f, S* out) const {
+    for (int k = 0; k < 3; ++k) {
+      out[k] = E(0, k) * f[0] + E(1, k) * f[1] + E(2, k) * f[2];
+      out[3 + k] = E(0, k) * f[3] + E(1, k) * f[4] + E(2, k) * f[5];
+    }
+    out[0] += r.y() * out[5] - r.z() * out[4];
+    out[1] += r.z() * out[3] - r.x() * out[5];
+    out[2] += r.x() * out[4] - r.y() * out[3];
   }
   // Composition: (this * other) = C_X_A when this = C_X_B and other = B_X_A.
   Transform operator*(const Transform& o) const {
@@ -144,17 +167,20 @@ SPARSEBODY_INLINE Mat3<S> inverse_sym3(const Mat3<S>& D) {
   return R;
 }
 
-// Cholesky factor L (lower triangle written, L L^T = A) of a symmetric 6x6 matrix, unrolled.
-// Returns false when a pivot is not positive (same criterion as Eigen::LLT's NumericalIssue).
+// Cholesky factor L (lower triangle written, L L^T = A) of a symmetric 6x6 matrix given by its
+// lower triangle, unrolled, with the reciprocals of L's diagonal in inv_diag (the solve then
+// multiplies instead of dividing). Returns false when a pivot is not positive (same criterion as
+// Eigen::LLT's NumericalIssue).
 template <class S>
-inline bool cholesky_factor6(const Mat6<S>& A, Mat6<S>& L) noexcept {
+inline bool cholesky_factor6(const Mat6<S>& A, Mat6<S>& L, Vec6<S>& inv_diag) noexcept {
   for (int j = 0; j < 6; ++j) {
     S djj = A(j, j);
     for (int k = 0; k < j; ++k) djj -= L(j, k) * L(j, k);
-    if (djj <= S(0)) return false;
+    if (!(djj > S(0))) return false;
     const S ljj = std::sqrt(djj);
     L(j, j) = ljj;
     const S inv = S(1) / ljj;
+    inv_diag(j) = inv;
     for (int i = j + 1; i < 6; ++i) {
       S s = A(i, j);
       for (int k = 0; k < j; ++k) s -= L(i, k) * L(j, k);
@@ -165,17 +191,21 @@ inline bool cholesky_factor6(const Mat6<S>& A, Mat6<S>& L) noexcept {
 }
 // Solves (L L^T) x = b in place.
 template <class S>
-inline void cholesky_solve6(const Mat6<S>& L, Vec6<S>& x) noexcept {
-  for (int i = 0; i < 6; ++i) {
+SPARSEBODY_INLINE void cholesky_solve6(const Mat6<S>& L, const Vec6<S>& inv_diag, Vec6<S>& x) noexcept {
+  S y[6];
+  SPARSEBODY_UNROLL for (int i = 0; i < 6; ++i) {
     S s = x(i);
-    for (int k = 0; k < i; ++k) s -= L(i, k) * x(k);
-    x(i) = s / L(i, i);
+    SPARSEBODY_UNROLL for (int k = 0; k < 6; ++k)
+      if (k < i) s -= L(i, k) * y[k];
+    y[i] = s * inv_diag(i);
   }
-  for (int i = 5; i >= 0; --i) {
-    S s = x(i);
-    for (int k = i + 1; k < 6; ++k) s -= L(k, i) * x(k);
-    x(i) = s / L(i, i);
+  SPARSEBODY_UNROLL for (int i = 5; i >= 0; --i) {
+    S s = y[i];
+    SPARSEBODY_UNROLL for (int k = 0; k < 6; ++k)
+      if (k > i) s -= L(k, i) * y[k];
+    y[i] = s * inv_diag(i);
   }
+  SPARSEBODY_UNROLL for (int i = 0; i < 6; ++i) x(i) = y[i];
 }
 
 // r^ M (cross product of r with each column of M).
@@ -244,6 +274,75 @@ inline void add_transformed_inertia(const Transform<S>& X, const Mat6<S>& I, Mat
   }
 }
 
+// Element (r, c) of a symmetric matrix kept in its lower triangle (row >= column). With constant
+// indices (the unrolled loops below) the choice is made at compile time.
+template <class S>
+SPARSEBODY_INLINE S sym_lower(const Mat6<S>& M, int r, int c) noexcept {
+  return r >= c ? M(r, c) : M(c, r);
+}
+
+// The same congruence out += X^T I X on lower triangles only: reads I's lower triangle and adds to
+// out's lower triangle, never touching either upper triangle (ABA's pass 2 keeps I^A this way:
+// 21 instead of 36 entries read and written per body). Every loop has a constant trip count and
+// is unrolled, so the triangle tests fold away and the kernel is straight-line code.
+template <class S>
+SPARSEBODY_INLINE void add_transformed_inertia_lower(const Transform<S>& X, const Mat6<S>& I, Mat6<S>& out) noexcept {
+  const Mat3<S>& E = X.E;
+  const S rx = X.r.x(), ry = X.r.y(), rz = X.r.z();
+  // I = [A B; B^T C]: A(i,k) = sym_lower(I, i, k), B(i,k) = I(3+k, i), C(i,k) = sym_lower(I, 3+i, 3+k)
+  S AE[3][3], BE[3][3], CE[3][3];  // A E, B E, C E
+  SPARSEBODY_UNROLL for (int j = 0; j < 3; ++j) {
+    const S e0 = E(0, j), e1 = E(1, j), e2 = E(2, j);
+    SPARSEBODY_UNROLL for (int i = 0; i < 3; ++i) {
+      AE[i][j] = sym_lower(I, i, 0) * e0 + sym_lower(I, i, 1) * e1 + sym_lower(I, i, 2) * e2;
+      BE[i][j] = I(3, i) * e0 + I(4, i) * e1 + I(5, i) * e2;
+      CE[i][j] = sym_lower(I, 3 + i, 3) * e0 + sym_lower(I, 3 + i, 4) * e1 + sym_lower(I, 3 + i, 5) * e2;
+    }
+  }
+  S a[3][3], b[3][3], c[3][3];  // A' = E^T A E (lower), B' = E^T B E, C' = E^T C E (both triangles)
+  SPARSEBODY_UNROLL for (int j = 0; j < 3; ++j)
+    SPARSEBODY_UNROLL for (int i = 0; i < 3; ++i) {
+      b[i][j] = E(0, i) * BE[0][j] + E(1, i) * BE[1][j] + E(2, i) * BE[2][j];
+      if (i >= j) {
+        a[i][j] = E(0, i) * AE[0][j] + E(1, i) * AE[1][j] + E(2, i) * AE[2][j];
+        c[i][j] = c[j][i] = E(0, i) * CE[0][j] + E(1, i) * CE[1][j] + E(2, i) * CE[2][j];
+      }
+    }
+  S rc[3][3], rb[3][3];  // r^ C', r^ B'^T
+  SPARSEBODY_UNROLL for (int j = 0; j < 3; ++j) {
+    rc[0][j] = ry * c[2][j] - rz * c[1][j];
+    rc[1][j] = rz * c[0][j] - rx * c[2][j];
+    rc[2][j] = rx * c[1][j] - ry * c[0][j];
+    rb[0][j] = ry * b[j][2] - rz * b[j][1];
+    rb[1][j] = rz * b[j][0] - rx * b[j][2];
+    rb[2][j] = rx * b[j][1] - ry * b[j][0];
+  }
+  SPARSEBODY_UNROLL for (int j = 0; j < 3; ++j) {
+    // A_p = A' + r^ B'^T + (r^ B'^T)^T + r^ (r^ C')^T; column j of the last is r x (row j of r^ C')
+    const S q0 = rc[j][0], q1 = rc[j][1], q2 = rc[j][2];
+    const S rcr[3] = {ry * q2 - rz * q1, rz * q0 - rx * q2, rx * q1 - ry * q0};
+    SPARSEBODY_UNROLL for (int i = 0; i < 3; ++i) {
+      if (i >= j) {
+        out(i, j) += a[i][j] + rb[i][j] + rb[j][i] + rcr[i];
+        out(3 + i, 3 + j) += c[i][j];
+      }
+      out(3 + j, i) += b[i][j] + rc[i][j];  // B_p = B' + r^ C', stored as its transpose below the diagonal
+    }
+  }
+}
+
+// y = M x for a symmetric M kept in its lower triangle.
+template <class S>
+SPARSEBODY_INLINE Vec6<S> mul6v_lower(const Mat6<S>& M, const Vec6<S>& x) noexcept {
+  Vec6<S> y;
+  SPARSEBODY_UNROLL for (int i = 0; i < 6; ++i) {
+    S s = S(0);
+    SPARSEBODY_UNROLL for (int k = 0; k < 6; ++k) s += sym_lower(M, i, k) * x(k);
+    y(i) = s;
+  }
+  return y;
+}
+
 // Spatial cross products: v x m (motion) and v x* f (force), Featherstone eq. 2.31-2.32.
 template <class S>
 SPARSEBODY_INLINE Vec6<S> cross_motion(const Vec6<S>& v, const Vec6<S>& m) {
@@ -275,6 +374,31 @@ inline Mat6<S> rigid_inertia(S m, const Vec3<S>& c, const Mat3<S>& Ic) {
   I.template bottomLeftCorner<3, 3>() = -m * cx;
   I.template bottomRightCorner<3, 3>() = m * Mat3<S>::Identity();
   return I;
+}
+
+// y = I x for a rigid-body inertia I = rigid_inertia(m, c, Ic) (every Body::I: Model::finalize), from
+// its structure: I x = [Ibar w + h x u; m u - h x w] for x = (w; u), with Ibar = I's top-left block
+// and h = m c read from I's top-right block (m c^). 24 products instead of 36.
+template <class S>
+SPARSEBODY_INLINE void mul_rigid_inertia(const Mat6<S>& I, const S* x, S* y) noexcept {
+  const S mass = I(3, 3), hx = -I(1, 5), hy = I(0, 5), hz = -I(0, 4);
+  const S w0 = x[0], w1 = x[1], w2 = x[2], u0 = x[3], u1 = x[4], u2 = x[5];
+  y[0] = I(0, 0) * w0 + I(0, 1) * w1 + I(0, 2) * w2 + (hy * u2 - hz * u1);
+  y[1] = I(1, 0) * w0 + I(1, 1) * w1 + I(1, 2) * w2 + (hz * u0 - hx * u2);
+  y[2] = I(2, 0) * w0 + I(2, 1) * w1 + I(2, 2) * w2 + (hx * u1 - hy * u0);
+  y[3] = mass * u0 - (hy * w2 - hz * w1);
+  y[4] = mass * u1 - (hz * w0 - hx * w2);
+  y[5] = mass * u2 - (hx * w1 - hy * w0);
+}
+// f = v x* h (Featherstone eq. 2.32) on plain arrays.
+template <class S>
+SPARSEBODY_INLINE void cross_force(const S* v, const S* h, S* f) noexcept {
+  f[0] = (v[1] * h[2] - v[2] * h[1]) + (v[4] * h[5] - v[5] * h[4]);
+  f[1] = (v[2] * h[0] - v[0] * h[2]) + (v[5] * h[3] - v[3] * h[5]);
+  f[2] = (v[0] * h[1] - v[1] * h[0]) + (v[3] * h[4] - v[4] * h[3]);
+  f[3] = v[1] * h[5] - v[2] * h[4];
+  f[4] = v[2] * h[3] - v[0] * h[5];
+  f[5] = v[0] * h[4] - v[1] * h[3];
 }
 
 // E = R(q)^T for a quaternion (w, x, y, z) of any non-zero norm (scaled by 2 / |q|^2, so a slightly
