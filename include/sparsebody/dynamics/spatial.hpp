@@ -220,60 +220,6 @@ SPARSEBODY_INLINE Mat3<S> cross_mat(const Vec3<S>& r, const Mat3<S>& M) {
   return C;
 }
 
-// out += X^T I X for a symmetric I (articulated or rigid inertia), by 3x3 blocks as above but
-// written out by scalars: the symmetric blocks A', C', A_p are computed on one triangle only and
-// nothing is copied into temporaries of Eigen type (this is ABA's hottest kernel: ~190 multiplies
-// instead of the ~220 of the block products, and no calls or block copies).
-template <class S>
-inline void add_transformed_inertia(const Transform<S>& X, const Mat6<S>& I, Mat6<S>& out) noexcept {
-  const Mat3<S>& E = X.E;
-  const S rx = X.r.x(), ry = X.r.y(), rz = X.r.z();
-  S AE[3][3], BE[3][3], CE[3][3];  // A E, B E, C E
-  for (int j = 0; j < 3; ++j) {
-    const S e0 = E(0, j), e1 = E(1, j), e2 = E(2, j);
-    for (int i = 0; i < 3; ++i) {
-      AE[i][j] = I(i, 0) * e0 + I(i, 1) * e1 + I(i, 2) * e2;
-      BE[i][j] = I(i, 3) * e0 + I(i, 4) * e1 + I(i, 5) * e2;
-      CE[i][j] = I(3 + i, 3) * e0 + I(3 + i, 4) * e1 + I(3 + i, 5) * e2;
-    }
-  }
-  S a[3][3], b[3][3], c[3][3];  // A' = E^T A E, B' = E^T B E, C' = E^T C E
-  for (int j = 0; j < 3; ++j) {
-    for (int i = 0; i < 3; ++i) b[i][j] = E(0, i) * BE[0][j] + E(1, i) * BE[1][j] + E(2, i) * BE[2][j];
-    for (int i = 0; i <= j; ++i) {
-      a[i][j] = a[j][i] = E(0, i) * AE[0][j] + E(1, i) * AE[1][j] + E(2, i) * AE[2][j];
-      c[i][j] = c[j][i] = E(0, i) * CE[0][j] + E(1, i) * CE[1][j] + E(2, i) * CE[2][j];
-    }
-  }
-  S rc[3][3], rb[3][3];  // r^ C', r^ B'^T
-  for (int j = 0; j < 3; ++j) {
-    rc[0][j] = ry * c[2][j] - rz * c[1][j];
-    rc[1][j] = rz * c[0][j] - rx * c[2][j];
-    rc[2][j] = rx * c[1][j] - ry * c[0][j];
-    rb[0][j] = ry * b[j][2] - rz * b[j][1];
-    rb[1][j] = rz * b[j][0] - rx * b[j][2];
-    rb[2][j] = rx * b[j][1] - ry * b[j][0];
-  }
-  for (int j = 0; j < 3; ++j) {
-    // A_p = A' + r^ B'^T + (r^ B'^T)^T + r^ (r^ C')^T, symmetric: column j of r^ (r^ C')^T is r x (row j of r^ C').
-    const S q0 = rc[j][0], q1 = rc[j][1], q2 = rc[j][2];
-    const S rcr[3] = {ry * q2 - rz * q1, rz * q0 - rx * q2, rx * q1 - ry * q0};
-    for (int i = 0; i <= j; ++i) {
-      const S v = a[i][j] + rb[i][j] + rb[j][i] + rcr[i];
-      out(i, j) += v;
-      if (i != j) out(j, i) += v;
-      const S w = c[i][j];
-      out(3 + i, 3 + j) += w;
-      if (i != j) out(3 + j, 3 + i) += w;
-    }
-    for (int i = 0; i < 3; ++i) {  // B_p = B' + r^ C'
-      const S v = b[i][j] + rc[i][j];
-      out(i, 3 + j) += v;
-      out(3 + j, i) += v;
-    }
-  }
-}
-
 // Element (r, c) of a symmetric matrix kept in its lower triangle (row >= column). With constant
 // indices (the unrolled loops below) the choice is made at compile time.
 template <class S>
@@ -329,6 +275,16 @@ SPARSEBODY_INLINE void add_transformed_inertia_lower(const Transform<S>& X, cons
       out(3 + j, i) += b[i][j] + rc[i][j];  // B_p = B' + r^ C', stored as its transpose below the diagonal
     }
   }
+}
+
+// out += X^T I X for a symmetric I (articulated or rigid inertia) and a symmetric out, both
+// triangles of out kept (CRBA's composite inertias): the lower-triangle kernel above, then its
+// lower triangle mirrored.
+template <class S>
+inline void add_transformed_inertia(const Transform<S>& X, const Mat6<S>& I, Mat6<S>& out) noexcept {
+  add_transformed_inertia_lower(X, I, out);
+  for (int c = 0; c < 6; ++c)
+    for (int r = c + 1; r < 6; ++r) out(c, r) = out(r, c);
 }
 
 // y = M x for a symmetric M kept in its lower triangle.
