@@ -351,8 +351,9 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       spine_.solve(body_, out_.pose(), out_.world(), o[0].p, cfg_.spine);
       pose::forward_kinematics(body_, out_.pose(), out_.world());
     }
+    track_headset_height(o[0].p.y());
     if (cfg_.head_height && head_ >= 0) follow_head_height(o[0].p.y());
-    if (cfg_.foot_ik) pin_feet(o[0].p.y());
+    if (cfg_.foot_ik) pin_feet();
     if (cfg_.hand_ik) {
       fit_arms(o, present);
       for (int side = 0; side < 2; ++side)
@@ -435,12 +436,11 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
 
   void reset_state() noexcept {
     lift_ = 0.0;
-    headset_y_[0] = headset_y_[1] = std::numeric_limits<double>::quiet_NaN();
+    headset_y_[0] = headset_y_[1] = head_vy_ = std::numeric_limits<double>::quiet_NaN();
     pred_.reset();
     lock_[0].reset();
     lock_[1].reset();
     shown_foot_valid_[0] = shown_foot_valid_[1] = false;
-    pin_head_y_[0] = pin_head_y_[1] = std::numeric_limits<double>::quiet_NaN();
     airborne_ = 0;
     still_.reset();
   }
@@ -458,15 +458,19 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   // Going down, each ankle is put back where it was (the legs bend; an ankle the lowered hip
   // cannot reach stretches towards it); going up, the feet go with the body and pin_feet()
   // stretches the legs to their pins or releases them.
+  // The headset's vertical speed over the last two frames (head_vy_, m/s, standard scale; NaN until
+  // there are two), which head height (a jump's take-off) and toe pins (airborne) both read.
+  void track_headset_height(double headset_y) noexcept {
+    head_vy_ = (headset_y - headset_y_[1]) * pred_.meta().frame_rate / 2;
+    headset_y_[1] = headset_y_[0];
+    headset_y_[0] = headset_y;
+  }
+
   void follow_head_height(double headset_y) noexcept {
     const double e = headset_y - out_.world().position[head_].y();
     const double band = cfg_.head_height_band;
     double want = !std::isfinite(e) ? 0.0 : e > band ? e - band : e < -band ? e + band : 0.0;
-    // the headset's rise over the last two frames (m/s); NaN until there are two
-    const double rise = (headset_y - headset_y_[1]) * pred_.meta().frame_rate / 2;
-    headset_y_[1] = headset_y_[0];
-    headset_y_[0] = headset_y;
-    if (want > 0.0 && !(rise > cfg_.head_height_jump_speed)) {
+    if (want > 0.0 && !(head_vy_ > cfg_.head_height_jump_speed)) {
       // up: as far as the pinned legs reach; a head higher by `release` lifts them (a jump's
       // take-off lifts them at once)
       const double m = pinned_lift();
@@ -503,16 +507,13 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   // stands still a locked foot also keeps the orientation it was planted with (the lock holds the
   // ankle, so a foot turning about it moves the toes: 1.2 cm/s of creep), eased in and out over
   // 8 frames.
-  void pin_feet(double headset_y) noexcept {
+  void pin_feet() noexcept {
     const bool toe_pin = cfg_.pin == N3PConfig::Pin::Toe;
     // Toe pins: the headset moving up or down fast (a jump, a drop) holds nothing for a while. The
     // stillness detector watches horizontal motion only, so a jump from a stand is "still", and a
     // held toe re-pinned at the top of the jump (where the network, lifted with the body, moves
     // its foot slowly) stayed there after the landing.
-    const double vy = (headset_y - pin_head_y_[1]) * pred_.meta().frame_rate / 2;  // over the last 2 frames
-    pin_head_y_[1] = pin_head_y_[0];
-    pin_head_y_[0] = headset_y;
-    if (std::abs(vy) > cfg_.airborne_speed) airborne_ = static_cast<int>(std::lround(cfg_.airborne_seconds * pred_.meta().frame_rate));
+    if (std::abs(head_vy_) > cfg_.airborne_speed) airborne_ = static_cast<int>(std::lround(cfg_.airborne_seconds * pred_.meta().frame_rate));
     else if (airborne_ > 0) --airborne_;
     for (int side = 0; side < 2; ++side) {
       const int* l = leg_[side];
@@ -526,12 +527,12 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       Eigen::Quaterniond& foot_w = w.rotation[l[2]];
       const Eigen::Vector3d& hip = w.position[l[0]];
       Eigen::Vector3d lock_hip = hip;
+      const Eigen::Vector3d& t = body_.offsets[toe_pin ? toe_[side] : l[2]];  // the toe in the foot frame (toe pins)
       if (toe_pin) {
         // A toe pin is in reach when the ankle it asks for is: the lock measures it from the hip
         // moved by the foot's toe offset, the foot as it will be shown (a held foot keeps its
         // planted orientation, FootLock::orient: judged by the network's foot instead, a pin the
         // legs could not reach in a jump was kept, and the feet stayed in the air after landing).
-        const Eigen::Vector3d& t = body_.offsets[toe_[side]];
         Eigen::Quaterniond shown = still && shown_foot_valid_[side] ? shown_foot_[side] : foot_w;
         if (still && lock_[side].state() == pose::FootLock::State::Locked)
           shown = pose::roll_foot_into_reach(shown, lock_[side].lock_position(), t, hip, reach_[side], cfg_.max_foot_roll);
@@ -540,7 +541,6 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       if (lock_[side].update(c, w.position[toe_pin ? toe_[side] : l[2]], lock_hip, reach_[side], cfg_.foot_max_drift, target)) {
         lock_[side].orient(foot_w, still);  // planted while still, eased over 8 frames
         if (toe_pin) {  // the ankle, the foot turning about the toe
-          const Eigen::Vector3d& t = body_.offsets[toe_[side]];
           if (still) foot_w = pose::roll_foot_into_reach(foot_w, target, t, hip, reach_[side], cfg_.max_foot_roll);
           target -= foot_w * t;
         }
@@ -597,13 +597,13 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   int toe_[2] = {-1, -1};
   Eigen::Quaterniond shown_foot_[2] = {Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};  // last output's foot rotations
   bool shown_foot_valid_[2] = {false, false};
-  double pin_head_y_[2] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};  // the headset's last heights (pin_feet)
   int airborne_ = 0;  // frames left without the hold (toe pins after fast vertical head motion)
   int head_ = -1;
   pose::ChainReach spine_;
   double reach_[2] = {};
   double lift_ = 0.0;  // the vertical offset follow_head_height() gave the last frame (m, standard scale)
   double headset_y_[2] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};  // last 2 frames'
+  double head_vy_ = std::numeric_limits<double>::quiet_NaN();  // track_headset_height
 };
 
 // The shipped configuration, by name: the paper's sizes (G_sig / G_lo / G_up hidden 64 / 128 / 128:
