@@ -78,17 +78,9 @@ SPARSEBODY_INLINE bool spherical_articulated(const Body<S>& b, int i, Data<S, MB
   const int k = b.v_index;
   const S kk[3] = {d.implicit_diagonal(k) + b.armature, d.implicit_diagonal(k + 1) + b.armature,
                    d.implicit_diagonal(k + 2) + b.armature};
-  // D^-1 by cofactors (inverse_sym3, written out so that it stays in registers)
-  const S d00 = IA(0, 0) + kk[0], d10 = IA(1, 0), d20 = IA(2, 0), d11 = IA(1, 1) + kk[1], d21 = IA(2, 1), d22 = IA(2, 2) + kk[2];
-  const S c00 = d11 * d22 - d21 * d21, c10 = d20 * d21 - d10 * d22, c20 = d10 * d21 - d20 * d11;
-  const S inv = S(1) / (d00 * c00 + d10 * c10 + d20 * c20);
-  S Di[3][3];
-  Di[0][0] = c00 * inv;
-  Di[1][0] = Di[0][1] = c10 * inv;
-  Di[2][0] = Di[0][2] = c20 * inv;
-  Di[1][1] = (d00 * d22 - d20 * d20) * inv;
-  Di[2][1] = Di[1][2] = (d10 * d20 - d00 * d21) * inv;
-  Di[2][2] = (d00 * d11 - d10 * d10) * inv;
+  const S d00 = IA(0, 0) + kk[0];
+  S Di[3][3];  // D^-1
+  const S inv = inverse_sym3(d00, IA(1, 0), IA(2, 0), IA(1, 1) + kk[1], IA(2, 1), IA(2, 2) + kk[2], Di);
   Mat3<S>& Dinv = d.Dinv[i];
   SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c)
     SPARSEBODY_UNROLL for (int r = 0; r < 3; ++r) Dinv(r, c) = Di[r][c];
@@ -184,9 +176,8 @@ inline bool aba_backward_pass(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, con
     }
     if (b.parent < 0) continue;
     add_transformed_inertia_lower(d.X[i], Ia, d.IA[b.parent]);  // I^A_lambda += X^T I^a X
-    S pv[6], o[6];  // p^A_lambda += X^T p^a
-    SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) pv[r] = pa(r);
-    d.X[i].apply_transpose_force(pv, o);
+    S o[6];  // p^A_lambda += X^T p^a
+    d.X[i].apply_transpose_force(pa.data(), o);
     Vec6<S>& pA = d.pA[b.parent];
     SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) pA(r) += o[r];
   }

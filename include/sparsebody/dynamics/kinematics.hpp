@@ -25,26 +25,18 @@ template <class S, int MB, int MD>
 SPARSEBODY_INLINE void joint_transform(const Model<S, MB, MD>& m, int i, const typename Model<S, MB, MD>::VecQ& q, S* e, S* r) {
   const Body<S>& b = m.bodies[i];
   const int k = b.q_index;
-  auto quat = [&](S w, S x, S y, S z) {  // quat_to_transposed_rotation, into e
-    const S s = S(2) / (w * w + x * x + y * y + z * z);
-    const S xx = s * x * x, yy = s * y * y, zz = s * z * z;
-    const S xy = s * x * y, xz = s * x * z, yz = s * y * z;
-    const S wx = s * w * x, wy = s * w * y, wz = s * w * z;
-    e[0] = S(1) - yy - zz; e[3] = xy + wz;         e[6] = xz - wy;
-    e[1] = xy - wz;         e[4] = S(1) - xx - zz; e[7] = yz + wx;
-    e[2] = xz + wy;         e[5] = yz - wx;         e[8] = S(1) - xx - yy;
-  };
+
   r[0] = b.XT.r.x();
   r[1] = b.XT.r.y();
   r[2] = b.XT.r.z();
   switch (b.joint) {
     case JointType::Free:
-      quat(q(k + 3), q(k + 4), q(k + 5), q(k + 6));
+      quat_to_transposed_rotation(q(k + 3), q(k + 4), q(k + 5), q(k + 6), e);
       r[0] = q(k);
       r[1] = q(k + 1);
       r[2] = q(k + 2);
       return;
-    case JointType::Spherical: quat(q(k), q(k + 1), q(k + 2), q(k + 3)); break;
+    case JointType::Spherical: quat_to_transposed_rotation(q(k), q(k + 1), q(k + 2), q(k + 3), e); break;
     case JointType::Revolute: {  // E = R^T = cos 1 - sin [a]x + (1 - cos) a a^T
       const S c = std::cos(q(k)), sn = std::sin(q(k)), t = S(1) - c;
       const S ax = b.axis.x(), ay = b.axis.y(), az = b.axis.z();
@@ -132,16 +124,8 @@ inline void forward_kinematics(const Model<S, MB, MD>& m, Data<S, MB, MD>& d,
     }
     // v = X v_lambda + S qd. S is constant in body coordinates, so c = v x S qd; for spherical and
     // revolute joints vJ = (w_J, 0), hence c = (w x w_J, v_lin x w_J).
-    const Vec6<S>& vp = d.v[pi];
-    const S wx = vp(0), wy = vp(1), wz = vp(2);
-    const S ux = vp(3) - (r[1] * wz - r[2] * wy), uy = vp(4) - (r[2] * wx - r[0] * wz), uz = vp(5) - (r[0] * wy - r[1] * wx);
     S o[6];
-    o[0] = e[0] * wx + e[3] * wy + e[6] * wz;
-    o[1] = e[1] * wx + e[4] * wy + e[7] * wz;
-    o[2] = e[2] * wx + e[5] * wy + e[8] * wz;
-    o[3] = e[0] * ux + e[3] * uy + e[6] * uz;
-    o[4] = e[1] * ux + e[4] * uy + e[7] * uz;
-    o[5] = e[2] * ux + e[5] * uy + e[8] * uz;
+    apply_motion(e, r, d.v[pi].data(), o);
     S j0 = S(0), j1 = S(0), j2 = S(0);  // w_J
     if (b.joint == JointType::Spherical) {
       j0 = (*qd)(k);

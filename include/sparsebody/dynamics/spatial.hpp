@@ -37,6 +37,24 @@ inline Mat3<S> skew(const Vec3<S>& a) {
   return m;
 }
 
+// out = X m for a motion vector, X = (E, r) given as E column-major in e[9] (E(i, j) = e[i + 3 j])
+// and r[3]: Transform::apply, and forward kinematics on an X still in registers. Written out by
+// component: for 3-vectors Eigen's packet code (AVX-512 here) costs more than it saves, and this
+// runs ~4 times per body per ABA call. m and out distinct.
+template <class S>
+SPARSEBODY_INLINE void apply_motion(const S* e, const S* r, const S* m, S* out) noexcept {
+  const S wx = m[0], wy = m[1], wz = m[2];
+  const S ux = m[3] - (r[1] * wz - r[2] * wy);  // v - r x w
+  const S uy = m[4] - (r[2] * wx - r[0] * wz);
+  const S uz = m[5] - (r[0] * wy - r[1] * wx);
+  out[0] = e[0] * wx + e[3] * wy + e[6] * wz;
+  out[1] = e[1] * wx + e[4] * wy + e[7] * wz;
+  out[2] = e[2] * wx + e[5] * wy + e[8] * wz;
+  out[3] = e[0] * ux + e[3] * uy + e[6] * uz;
+  out[4] = e[1] * ux + e[4] * uy + e[7] * uz;
+  out[5] = e[2] * ux + e[5] * uy + e[8] * uz;
+}
+
 // Plucker transform B_X_A from frame A (parent) to frame B (child), stored as Featherstone's (E, r):
 // E rotates A-coordinates into B-coordinates, r is B's origin expressed in A. As a 6x6 matrix
 // X = [E 0; -E r^ E]. Storing (E, r) instead of 6x6 costs 24 multiplies per apply instead of 36.
@@ -45,36 +63,14 @@ struct Transform {
   Mat3<S> E = Mat3<S>::Identity();
   Vec3<S> r = Vec3<S>::Zero();
 
-  // The three products below are written out by component: for 3-vectors Eigen's packet code
-  // (AVX-512 here) costs more than it saves, and these run ~4 times per body per ABA call.
-  // m_B = X m_A (motion vectors).
+  // m_B = X m_A (motion vectors), by component (apply_motion above).
   SPARSEBODY_INLINE Vec6<S> apply(const Vec6<S>& m) const {
-    const S wx = m(0), wy = m(1), wz = m(2);
-    const S ux = m(3) - (r.y() * wz - r.z() * wy);  // v - r x w
-    const S uy = m(4) - (r.z() * wx - r.x() * wz);
-    const S uz = m(5) - (r.x() * wy - r.y() * wx);
     Vec6<S> out;
-    out(0) = E(0, 0) * wx + E(0, 1) * wy + E(0, 2) * wz;
-    out(1) = E(1, 0) * wx + E(1, 1) * wy + E(1, 2) * wz;
-    out(2) = E(2, 0) * wx + E(2, 1) * wy + E(2, 2) * wz;
-    out(3) = E(0, 0) * ux + E(0, 1) * uy + E(0, 2) * uz;
-    out(4) = E(1, 0) * ux + E(1, 1) * uy + E(1, 2) * uz;
-    out(5) = E(2, 0) * ux + E(2, 1) * uy + E(2, 2) * uz;
+    apply_motion(E.data(), r.data(), m.data(), out.data());
     return out;
   }
   // The same on plain arrays (m and out distinct), for passes that keep vectors in scalars.
-  SPARSEBODY_INLINE void apply(const S* m, S* out) const {
-    const S wx = m[0], wy = m[1], wz = m[2];
-    const S ux = m[3] - (r.y() * wz - r.z() * wy);
-    const S uy = m[4] - (r.z() * wx - r.x() * wz);
-    const S uz = m[5] - (r.x() * wy - r.y() * wx);
-    out[0] = E(0, 0) * wx + E(0, 1) * wy + E(0, 2) * wz;
-    out[1] = E(1, 0) * wx + E(1, 1) * wy + E(1, 2) * wz;
-    out[2] = E(2, 0) * wx + E(2, 1) * wy + E(2, 2) * wz;
-    out[3] = E(0, 0) * ux + E(0, 1) * uy + E(0, 2) * uz;
-    out[4] = E(1, 0) * ux + E(1, 1) * uy + E(1, 2) * uz;
-    out[5] = E(2, 0) * ux + E(2, 1) * uy + E(2, 2) * uz;
-  }
+  SPARSEBODY_INLINE void apply(const S* m, S* out) const { apply_motion(E.data(), r.data(), m, out); }
   // m_A = X^-1 m_B (motion vectors, child to parent).
   SPARSEBODY_INLINE Vec6<S> apply_inverse(const Vec6<S>& m) const {
     Vec6<S> out;
@@ -90,13 +86,7 @@ struct Transform {
   // f_A = X^T f_B: a force on the child expressed in the parent (X^* inverse = X^T).
   SPARSEBODY_INLINE Vec6<S> apply_transpose_force(const Vec6<S>& f) const {
     Vec6<S> out;
-    for (int k = 0; k < 3; ++k) {
-      out(k) = E(0, k) * f(0) + E(1, k) * f(1) + E(2, k) * f(2);
-      out(3 + k) = E(0, k) * f(3) + E(1, k) * f(4) + E(2, k) * f(5);
-    }
-    out(0) += r.y() * out(5) - r.z() * out(4);  // + r x f_A
-    out(1) += r.z() * out(3) - r.x() * out(5);
-    out(2) += r.x() * out(4) - r.y() * out(3);
+    apply_transpose_force(f.data(), out.data());
     return out;
   }
   // The same on plain arrays (f and out distinct).
@@ -145,26 +135,20 @@ SPARSEBODY_INLINE Mat3<S> mul_t33(const Mat3<S>& A, const Mat3<S>& B) {  // A^T 
     for (int i = 0; i < 3; ++i) C(i, j) = A(0, i) * B(0, j) + A(1, i) * B(1, j) + A(2, i) * B(2, j);
   return C;
 }
-// 6x6 matrix times 6-vector, as plain loops (see mul33).
+// Inverse of a symmetric 3x3 matrix by cofactors (D_i of a spherical joint is SPD), from its lower
+// triangle (a, b, c, e, f, g) = (D00, D10, D20, D11, D21, D22) into R (both triangles). Returns
+// 1 / det(D). Plain arrays so that ABA keeps D^-1 in registers.
 template <class S>
-SPARSEBODY_INLINE Vec6<S> mul6v(const Mat6<S>& A, const Vec6<S>& x) {
-  Vec6<S> y;
-  for (int i = 0; i < 6; ++i)
-    y(i) = A(i, 0) * x(0) + A(i, 1) * x(1) + A(i, 2) * x(2) + A(i, 3) * x(3) + A(i, 4) * x(4) + A(i, 5) * x(5);
-  return y;
-}
-
-// Inverse of a symmetric 3x3 matrix by cofactors (D_i of a spherical joint is SPD).
-template <class S>
-SPARSEBODY_INLINE Mat3<S> inverse_sym3(const Mat3<S>& D) {
-  const S a = D(0, 0), b = D(1, 0), c = D(2, 0), e = D(1, 1), f = D(2, 1), g = D(2, 2);
+SPARSEBODY_INLINE S inverse_sym3(S a, S b, S c, S e, S f, S g, S (&R)[3][3]) noexcept {
   const S A = e * g - f * f, B = c * f - b * g, C = b * f - c * e;
   const S inv = S(1) / (a * A + b * B + c * C);
-  Mat3<S> R;
-  R(0, 0) = A * inv; R(1, 0) = B * inv; R(2, 0) = C * inv;
-  R(1, 1) = (a * g - c * c) * inv; R(2, 1) = (b * c - a * f) * inv; R(2, 2) = (a * e - b * b) * inv;
-  R(0, 1) = R(1, 0); R(0, 2) = R(2, 0); R(1, 2) = R(2, 1);
-  return R;
+  R[0][0] = A * inv;
+  R[1][0] = R[0][1] = B * inv;
+  R[2][0] = R[0][2] = C * inv;
+  R[1][1] = (a * g - c * c) * inv;
+  R[2][1] = R[1][2] = (b * c - a * f) * inv;
+  R[2][2] = (a * e - b * b) * inv;
+  return inv;
 }
 
 // Cholesky factor L (lower triangle written, L L^T = A) of a symmetric 6x6 matrix given by its
@@ -309,15 +293,6 @@ SPARSEBODY_INLINE Vec6<S> cross_motion(const Vec6<S>& v, const Vec6<S>& m) {
   out.template tail<3>() = w.cross(mv) + vo.cross(mw);
   return out;
 }
-template <class S>
-SPARSEBODY_INLINE Vec6<S> cross_force(const Vec6<S>& v, const Vec6<S>& f) {
-  const Vec3<S> w = v.template head<3>(), vo = v.template tail<3>();
-  const Vec3<S> fn = f.template head<3>(), ff = f.template tail<3>();
-  Vec6<S> out;
-  out.template head<3>() = w.cross(fn) + vo.cross(ff);
-  out.template tail<3>() = w.cross(ff);
-  return out;
-}
 
 // Rigid-body spatial inertia about the body origin from mass m, centre of mass c and the
 // rotational inertia Ic about c (all in body coordinates): I = [Ic - m c^c^, m c^; -m c^, m 1].
@@ -356,18 +331,26 @@ SPARSEBODY_INLINE void cross_force(const S* v, const S* h, S* f) noexcept {
   f[4] = v[2] * h[3] - v[0] * h[5];
   f[5] = v[0] * h[4] - v[1] * h[3];
 }
+// The same on Vec6 (Featherstone eq. 2.32).
+template <class S>
+SPARSEBODY_INLINE Vec6<S> cross_force(const Vec6<S>& v, const Vec6<S>& f) {
+  Vec6<S> out;
+  cross_force(v.data(), f.data(), out.data());
+  return out;
+}
 
 // E = R(q)^T for a quaternion (w, x, y, z) of any non-zero norm (scaled by 2 / |q|^2, so a slightly
-// unnormalised state never shears the rotation and no sqrt is needed).
+// unnormalised state never shears the rotation and no sqrt is needed), column-major into e[9]
+// (E(i, j) = e[i + 3 j]).
 template <class S>
-SPARSEBODY_INLINE void quat_to_transposed_rotation(S w, S x, S y, S z, Mat3<S>& E) {
+SPARSEBODY_INLINE void quat_to_transposed_rotation(S w, S x, S y, S z, S* e) noexcept {
   const S s = S(2) / (w * w + x * x + y * y + z * z);
   const S xx = s * x * x, yy = s * y * y, zz = s * z * z;
   const S xy = s * x * y, xz = s * x * z, yz = s * y * z;
   const S wx = s * w * x, wy = s * w * y, wz = s * w * z;
-  E(0, 0) = S(1) - yy - zz; E(1, 0) = xy - wz;         E(2, 0) = xz + wy;
-  E(0, 1) = xy + wz;         E(1, 1) = S(1) - xx - zz; E(2, 1) = yz - wx;
-  E(0, 2) = xz - wy;         E(1, 2) = yz + wx;         E(2, 2) = S(1) - xx - yy;
+  e[0] = S(1) - yy - zz; e[3] = xy + wz;         e[6] = xz - wy;
+  e[1] = xy - wz;         e[4] = S(1) - xx - zz; e[7] = yz + wx;
+  e[2] = xz + wy;         e[5] = yz - wx;         e[8] = S(1) - xx - yy;
 }
 
 // Quaternion exponential map: rotation by the rotation vector w (angle |w|), exact for all |w|.
