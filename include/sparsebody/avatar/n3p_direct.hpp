@@ -440,7 +440,6 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     pred_.reset();
     lock_[0].reset();
     lock_[1].reset();
-    shown_foot_valid_[0] = shown_foot_valid_[1] = false;
     airborne_ = 0;
     still_.reset();
   }
@@ -533,7 +532,8 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
         // moved by the foot's toe offset, the foot as it will be shown (a held foot keeps its
         // planted orientation, FootLock::orient: judged by the network's foot instead, a pin the
         // legs could not reach in a jump was kept, and the feet stayed in the air after landing).
-        Eigen::Quaterniond shown = still && shown_foot_valid_[side] ? shown_foot_[side] : foot_w;
+        const Eigen::Quaterniond* last = lock_[side].shown_foot();
+        Eigen::Quaterniond shown = still && last ? *last : foot_w;
         if (still && lock_[side].state() == pose::FootLock::State::Locked)
           shown = pose::roll_foot_into_reach(shown, lock_[side].lock_position(), t, hip, reach_[side], cfg_.max_foot_roll);
         lock_hip += shown * t;
@@ -548,8 +548,6 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
         pose::forward_kinematics(body_, out_.pose(), out_.world());
       }
       lock_[side].show(out_.world().rotation[l[2]]);
-      shown_foot_[side] = out_.world().rotation[l[2]];
-      shown_foot_valid_[side] = true;
     }
   }
   // Where a pinned foot's ankle is: the pin itself, or the toe pin less the foot's toe offset, the
@@ -557,7 +555,8 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   Eigen::Vector3d ankle_pin(int side) const noexcept {
     const Eigen::Vector3d& p = lock_[side].lock_position();
     if (cfg_.pin != N3PConfig::Pin::Toe) return p;
-    const Eigen::Quaterniond& foot = shown_foot_valid_[side] ? shown_foot_[side] : out_.world().rotation[leg_[side][2]];
+    const Eigen::Quaterniond* shown = lock_[side].shown_foot();
+    const Eigen::Quaterniond& foot = shown ? *shown : out_.world().rotation[leg_[side][2]];
     return p - foot * body_.offsets[toe_[side]];
   }
 
@@ -595,8 +594,6 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   std::array<bool, 3> present_{};
   int arm_[2][3] = {}, leg_[2][3] = {};
   int toe_[2] = {-1, -1};
-  Eigen::Quaterniond shown_foot_[2] = {Eigen::Quaterniond::Identity(), Eigen::Quaterniond::Identity()};  // last output's foot rotations
-  bool shown_foot_valid_[2] = {false, false};
   int airborne_ = 0;  // frames left without the hold (toe pins after fast vertical head motion)
   int head_ = -1;
   pose::ChainReach spine_;

@@ -47,7 +47,7 @@ class FootLock {
   // Free, nothing shown; the rearm step is kept.
   void reset() noexcept {
     state_ = State::Free;
-    hold_off_ = hold_ = shown_ = just_locked_ = false;
+    hold_off_ = hold_ = shown_ = foot_shown_ = just_locked_ = false;
     settle_ = n_;
     plant_w_ = 0;
     contact_y_ = std::numeric_limits<double>::infinity();
@@ -77,9 +77,11 @@ class FootLock {
     p.x() *= k, p.z() *= k;
     const bool hold = hold_;  // as the caller set it for this frame
     const double contact_y = contact_y_;
+    const bool foot_shown = foot_shown_;
     reset();
     hold_ = hold;
     contact_y_ = contact_y;
+    foot_shown_ = foot_shown;
     state_ = State::Locked;
     from_ = lock_ = current_ = last_joint_ = p;
     lock_.y() = lock_height ? *lock_height : std::min(p.y(), contact_y_);
@@ -111,7 +113,12 @@ class FootLock {
   }
   // The foot joint's world rotation as output this frame (after IK): what stop() and lock_in_place()
   // plant. Call it every frame after update().
-  void show(const Eigen::Quaterniond& foot) noexcept { shown_foot_ = foot; }
+  void show(const Eigen::Quaterniond& foot) noexcept {
+    shown_foot_ = foot;
+    foot_shown_ = true;
+  }
+  // The last show()n rotation; nullptr when none since reset() (lock_in_place() keeps it).
+  const Eigen::Quaterniond* shown_foot() const noexcept { return foot_shown_ ? &shown_foot_ : nullptr; }
   // Under hold, how far (m per frame, the joint's units) the network's joint may move for a held-off
   // free foot to lock; the pipelines set speed / frame rate. Kept by reset().
   void set_hold_rearm_step(double metres) noexcept { rearm_step_ = metres; }
@@ -240,6 +247,7 @@ class FootLock {
   int k_ = 0, settle_ = n_;  // settle_ < n_: a hold lock still easing down to its height
   double rearm_step_ = 0.004;  // 0.12 m/s at 30 Hz
   bool hold_off_ = false, hold_ = false, shown_ = false;  // shown_: current_ and last_joint_ are last frame's
+  bool foot_shown_ = false;  // shown_foot_ holds a show()n rotation
   Eigen::Vector3d lock_ = Eigen::Vector3d::Zero(), from_ = Eigen::Vector3d::Zero(), current_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d last_joint_ = Eigen::Vector3d::Zero();  // the network's joint, last frame
   bool just_locked_ = false;  // the last update() locked the foot (it was not locked before)
