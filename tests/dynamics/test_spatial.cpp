@@ -116,3 +116,37 @@ TEST_CASE("float ABA agrees with double ABA") {
   std::printf("[float] ABA float vs double: max rel err %.2e\n", worst);
   CHECK(worst < 1e-4);
 }
+
+// mul_rigid_inertia equals the dense I x, and its two-lane form (RNEA's I a and I v together)
+// equals two one-lane calls: with the compiler's vectors (float, double) and the plain pair (long
+// double).
+template <class S>
+void check_rigid_inertia_lanes(std::mt19937& rng) {
+  std::normal_distribution<double> n;
+  const Vec3<S> c(S(n(rng)), S(n(rng)), S(n(rng)));
+  const Mat3<S> A = Mat3<S>::Random();
+  const Mat6<S> I = rigid_inertia(S(2.5), c, Mat3<S>(A * A.transpose()));
+  S x[6], y[6], u[6], z[6];
+  for (int k = 0; k < 6; ++k) x[k] = S(n(rng)), y[k] = S(n(rng));
+  mul_rigid_inertia(I, x, u);
+  mul_rigid_inertia(I, y, z);
+  const Vec6<S> dense = I * Eigen::Map<const Vec6<S>>(x);
+  for (int k = 0; k < 6; ++k) CHECK(double(std::abs(u[k] - dense(k))) < 1e-5 * double(I.norm()));
+  Lanes2<S> xy[6], out[6];
+  for (int k = 0; k < 6; ++k) xy[k] = Lanes2Of<S>::make(x[k], y[k]);
+  mul_rigid_inertia(I, xy, out);
+  for (int k = 0; k < 6; ++k) {
+    // the same arithmetic per lane (a compiler may contract the lanes' and the scalars' products
+    // into FMAs differently: equal to rounding)
+    CHECK(double(std::abs(out[k][0] - u[k])) <= 8 * double(std::numeric_limits<S>::epsilon()) * double(I.norm()) * 10);
+    CHECK(double(std::abs(out[k][1] - z[k])) <= 8 * double(std::numeric_limits<S>::epsilon()) * double(I.norm()) * 10);
+  }
+}
+TEST_CASE("spatial: rigid inertia product, one lane and two") {
+  std::mt19937 rng(3);
+  for (int it = 0; it < 20; ++it) {
+    check_rigid_inertia_lanes<double>(rng);
+    check_rigid_inertia_lanes<float>(rng);
+    check_rigid_inertia_lanes<long double>(rng);
+  }
+}
