@@ -22,6 +22,36 @@
 
 namespace sparsebody::dynamics {
 
+// Two values that go through the same arithmetic, one per lane, in half the instructions: RNEA's
+// I a and I v (one inertia times two vectors), a force's two halves under one rotation. GCC/Clang
+// vector extensions for float and double (SSE2 / NEON registers); other scalar types and
+// compilers get a plain pair. Lanes are read as p[0], p[1].
+template <class S>
+struct Lanes2Of {
+  struct type {
+    S v[2];
+    S operator[](int k) const { return v[k]; }
+    friend type operator+(type a, type b) { return {{a.v[0] + b.v[0], a.v[1] + b.v[1]}}; }
+    friend type operator-(type a, type b) { return {{a.v[0] - b.v[0], a.v[1] - b.v[1]}}; }
+    friend type operator*(S a, type b) { return {{a * b.v[0], a * b.v[1]}}; }
+  };
+  static type make(S a, S b) { return {{a, b}}; }
+};
+#if defined(__GNUC__) || defined(__clang__)
+template <>
+struct Lanes2Of<double> {
+  typedef double type __attribute__((vector_size(16)));
+  static type make(double a, double b) { return type{a, b}; }
+};
+template <>
+struct Lanes2Of<float> {
+  typedef float type __attribute__((vector_size(8)));
+  static type make(float a, float b) { return type{a, b}; }
+};
+#endif
+template <class S>
+using Lanes2 = typename Lanes2Of<S>::type;
+
 template <class S> using Vec3 = Eigen::Matrix<S, 3, 1>;
 template <class S> using Vec6 = Eigen::Matrix<S, 6, 1>;
 template <class S> using Mat3 = Eigen::Matrix<S, 3, 3>;
@@ -91,9 +121,12 @@ struct Transform {
   }
   // The same on plain arrays (f and out distinct).
   SPARSEBODY_INLINE void apply_transpose_force(const S* f, S* out) const {
+    // E^T n and E^T f in the two lanes of one product
+    const Lanes2<S> f0 = Lanes2Of<S>::make(f[0], f[3]), f1 = Lanes2Of<S>::make(f[1], f[4]), f2 = Lanes2Of<S>::make(f[2], f[5]);
     for (int k = 0; k < 3; ++k) {
-      out[k] = E(0, k) * f[0] + E(1, k) * f[1] + E(2, k) * f[2];
-      out[3 + k] = E(0, k) * f[3] + E(1, k) * f[4] + E(2, k) * f[5];
+      const Lanes2<S> o = E(0, k) * f0 + E(1, k) * f1 + E(2, k) * f2;
+      out[k] = o[0];
+      out[3 + k] = o[1];
     }
     out[0] += r.y() * out[5] - r.z() * out[4];
     out[1] += r.z() * out[3] - r.x() * out[5];
@@ -307,35 +340,6 @@ inline Mat6<S> rigid_inertia(S m, const Vec3<S>& c, const Mat3<S>& Ic) {
   return I;
 }
 
-// Two values that go through the same arithmetic, one per lane: RNEA's I a and I v (the same
-// inertia times two vectors) in half the instructions. GCC/Clang vector extensions for float and
-// double (SSE2 / NEON registers); other scalar types and compilers get a plain pair. Lanes are
-// read as p[0], p[1].
-template <class S>
-struct Lanes2Of {
-  struct type {
-    S v[2];
-    S operator[](int k) const { return v[k]; }
-    friend type operator+(type a, type b) { return {{a.v[0] + b.v[0], a.v[1] + b.v[1]}}; }
-    friend type operator-(type a, type b) { return {{a.v[0] - b.v[0], a.v[1] - b.v[1]}}; }
-    friend type operator*(S a, type b) { return {{a * b.v[0], a * b.v[1]}}; }
-  };
-  static type make(S a, S b) { return {{a, b}}; }
-};
-#if defined(__GNUC__) || defined(__clang__)
-template <>
-struct Lanes2Of<double> {
-  typedef double type __attribute__((vector_size(16)));
-  static type make(double a, double b) { return type{a, b}; }
-};
-template <>
-struct Lanes2Of<float> {
-  typedef float type __attribute__((vector_size(8)));
-  static type make(float a, float b) { return type{a, b}; }
-};
-#endif
-template <class S>
-using Lanes2 = typename Lanes2Of<S>::type;
 
 // y = I x for a rigid-body inertia I = rigid_inertia(m, c, Ic) (every Body::I: Model::finalize), from
 // its structure: I x = [Ibar w + h x u; m u - h x w] for x = (w; u), with Ibar = I's top-left block
