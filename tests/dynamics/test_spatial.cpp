@@ -135,11 +135,12 @@ void check_rigid_inertia_lanes(std::mt19937& rng) {
   Lanes2<S> xy[6], out[6];
   for (int k = 0; k < 6; ++k) xy[k] = Lanes2Of<S>::make(x[k], y[k]);
   mul_rigid_inertia(I, xy, out);
+  // the same arithmetic per lane (a compiler may contract the lanes' and the scalars' products
+  // into FMAs differently: equal to rounding)
+  const double tol = 80 * double(std::numeric_limits<S>::epsilon()) * double(I.norm());
   for (int k = 0; k < 6; ++k) {
-    // the same arithmetic per lane (a compiler may contract the lanes' and the scalars' products
-    // into FMAs differently: equal to rounding)
-    CHECK(double(std::abs(out[k][0] - u[k])) <= 8 * double(std::numeric_limits<S>::epsilon()) * double(I.norm()) * 10);
-    CHECK(double(std::abs(out[k][1] - z[k])) <= 8 * double(std::numeric_limits<S>::epsilon()) * double(I.norm()) * 10);
+    CHECK(double(std::abs(out[k][0] - u[k])) <= tol);
+    CHECK(double(std::abs(out[k][1] - z[k])) <= tol);
   }
 }
 TEST_CASE("spatial: rigid inertia product, one lane and two") {

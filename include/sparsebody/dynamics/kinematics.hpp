@@ -25,7 +25,6 @@ template <class S, int MB, int MD>
 SPARSEBODY_INLINE void joint_transform(const Model<S, MB, MD>& m, int i, const typename Model<S, MB, MD>::VecQ& q, S* e, S* r) {
   const Body<S>& b = m.bodies[i];
   const int k = b.q_index;
-
   r[0] = b.XT.r.x();
   r[1] = b.XT.r.y();
   r[2] = b.XT.r.z();

@@ -340,7 +340,6 @@ inline Mat6<S> rigid_inertia(S m, const Vec3<S>& c, const Mat3<S>& Ic) {
   return I;
 }
 
-
 // y = I x for a rigid-body inertia I = rigid_inertia(m, c, Ic) (every Body::I: Model::finalize), from
 // its structure: I x = [Ibar w + h x u; m u - h x w] for x = (w; u), with Ibar = I's top-left block
 // and h = m c read from I's top-right block (m c^). 24 products instead of 36. V is S, or Lanes2<S>
