@@ -26,6 +26,8 @@ against the clip that drove it, the same way for every input path:
 
 Metrics (12 joints mapped by role: hips, head, hands, thighs, knees, ankles, toes; metres -> cm):
   mpjpe        mean joint position error, world, floor at y = 0
+  moving       mpjpe without the held stand's frames (devices, csv ...: the frames compared one to one
+               with the clip's own motion, which the nominal run also covers; = mpjpe without a stand)
   lower        the same over hips and legs
   toe          toe-base position error
   skate        mean horizontal toe speed of the output while the clip's foot is in contact (cm/s)
@@ -109,11 +111,13 @@ def compare_positions(P_out, truth_bvh, truth_units=None, hold=None):
     truth = Clip(truth_bvh, units=truth_units)
     out = _Positions(P_out)
     fps = truth.fps
+    held = np.zeros(out.frames, dtype=bool)
     if hold is not None and abs(truth.fps - 30.0) < 0.5:
         f0, nh = int(round(hold[0] * fps)), int(round(hold[1] * fps))
         i = np.arange(out.frames)
         ti = np.where(i < f0, i, np.where(i < f0 + nh, f0, i - nh))
         keep = ti < truth.frames
+        held = ((i >= f0) & (i < f0 + nh))[keep]
         sub = copy.copy(truth)
         sub.pw, sub.Rw = truth.pw[ti[keep]], truth.Rw[ti[keep]]
         truth, n = sub, int(keep.sum())
@@ -140,6 +144,8 @@ def compare_positions(P_out, truth_bvh, truth_units=None, hold=None):
     ti = [ROLES.index("toe_l"), ROLES.index("toe_r")]
     m = {"mpjpe": (e.sum(), e.size), "lower": (e[:, li].sum(), e[:, li].size), "toe": (e[:, ti].sum(), e[:, ti].size),
          "head": (e[:, ROLES.index("head")].sum(), n)}
+    mov = ~held[:n] if len(held) >= n else np.ones(n, dtype=bool)
+    m["moving"] = (e[mov].sum(), e[mov].size)
     sk, skn = 0.0, 0
     for s, j in enumerate(ti):
         v = hspeed(Po[:, j], fps)
@@ -366,7 +372,7 @@ def main(argv=None):
     tmp = a.tmp or tempfile.mkdtemp(prefix="offdist")
     os.makedirs(tmp, exist_ok=True)
     results, clips = [], []
-    print(f"{'model':7s} {'mode':10s} {'clips':>5s} {'MPJPE':>7s} {'lower':>7s} {'toe':>7s} {'head':>7s} "
+    print(f"{'model':7s} {'mode':10s} {'clips':>5s} {'MPJPE':>7s} {'moving':>7s} {'lower':>7s} {'toe':>7s} {'head':>7s} "
           f"{'skate':>7s} {'still':>7s} {'jitter':>7s}   (cm, cm/s, km/s^3)")
     for model in a.models:
         for mode in a.modes:
@@ -374,7 +380,7 @@ def main(argv=None):
             r.update(model=model, mode=mode)
             results.append(r)
             c = lambda k: 100 * r.get(k, float("nan"))
-            print(f"{model:7s} {mode:10s} {r['clips']:5d} {c('mpjpe'):7.2f} {c('lower'):7.2f} {c('toe'):7.2f} "
+            print(f"{model:7s} {mode:10s} {r['clips']:5d} {c('mpjpe'):7.2f} {c('moving'):7.2f} {c('lower'):7.2f} {c('toe'):7.2f} "
                   f"{c('head'):7.2f} {c('skate'):7.2f} {c('still_feet'):7.2f} {r.get('jitter', float('nan')):7.2f}" +
                   (f"   {len(fails)} failed: {fails[0]}" if fails else ""), flush=True)
     if a.plots and sb is not None:
