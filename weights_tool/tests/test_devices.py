@@ -90,3 +90,19 @@ def test_bodies_bvh_and_offdist_compare(tmp_path):
     assert m["mpjpe"][0] / m["mpjpe"][1] == pytest.approx(abs(b.floor()), abs=1e-9)
     m2 = offdist.compare(src, str(out / "short.bvh"), truth_units=a.units, out_units=a.units)
     assert m2["mpjpe"][0] / m2["mpjpe"][1] > 0.01  # a different body: an error the comparator sees
+
+
+def test_offdist_moving_leaves_out_the_held_stand(tmp_path):
+    src = short_clip(tmp_path, frames=60)
+    c = Clip(src)
+    P = c.pw[:, [c.roles[k] for k in offdist.ROLES]].copy()
+    P[..., 1] -= c.floor()
+    # a stand of 1 s (30 rows) holding frame 10, 5 cm off; the clip's own motion exact around it
+    held = np.repeat(P[10:11] + np.array([0.0, 0.03, 0.04]), 30, axis=0)
+    rows = np.concatenate([P[:10], held, P[10:]])
+    m = offdist.compare_positions(rows, src, hold=(10 / 30.0, 1.0))
+    # (the comparator takes the floor off the clip as the run showed it, stand included: < 0.1 mm apart)
+    assert m["moving"][1] == 60 * 12 and m["moving"][0] / m["moving"][1] < 1e-4
+    assert m["mpjpe"][0] / m["mpjpe"][1] == pytest.approx(0.05 * 30 / 90, abs=1e-4)
+    m0 = offdist.compare_positions(P, src)  # no stand: moving is the MPJPE
+    assert m0["moving"] == m0["mpjpe"]
