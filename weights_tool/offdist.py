@@ -144,7 +144,7 @@ def compare_positions(P_out, truth_bvh, truth_units=None, hold=None):
     ti = [ROLES.index("toe_l"), ROLES.index("toe_r")]
     m = {"mpjpe": (e.sum(), e.size), "lower": (e[:, li].sum(), e[:, li].size), "toe": (e[:, ti].sum(), e[:, ti].size),
          "head": (e[:, ROLES.index("head")].sum(), n)}
-    mov = ~held[:n] if len(held) >= n else np.ones(n, dtype=bool)
+    mov = ~held[:n]  # held has a row per output row kept (>= n)
     m["moving"] = (e[mov].sum(), e[mov].size)
     sk, skn = 0.0, 0
     for s, j in enumerate(ti):
