@@ -158,6 +158,7 @@ TEST_CASE("QuestSim env: step() with one thread never allocates (resets included
     CAPTURE(expert);
     training::QuestSimEnvConfig cfg;
     cfg.expert = expert;
+    cfg.record_reference = !expert;  // the world model's records (reference observations, frames)
     cfg.neutral_start = expert ? 0.0 : 0.5;  // both kinds of restart
     Env env(clips(), meta(), std::vector<double>(4, 1.75), 2, cfg);
     const auto act = random_actions(4, 9, 0.05f);

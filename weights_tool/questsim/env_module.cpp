@@ -126,6 +126,7 @@ PYBIND11_MODULE(_questsim_env, m) {
       .def_readwrite("joint_damping", &training::QuestSimEnvConfig::joint_damping)
       .def_readwrite("expert_pd_kp", &training::QuestSimEnvConfig::expert_pd_kp)
       .def_readwrite("expert_pd_kd", &training::QuestSimEnvConfig::expert_pd_kd)
+      .def_readwrite("record_reference", &training::QuestSimEnvConfig::record_reference)
       .def_readwrite("residual_max_force", &training::QuestSimEnvConfig::residual_max_force)
       .def_readwrite("residual_max_torque", &training::QuestSimEnvConfig::residual_max_torque)
       .def_property("reward_mean_over_joints", [](const training::QuestSimEnvConfig& c) { return c.reward.mean_over_joints; },
@@ -143,6 +144,18 @@ PYBIND11_MODULE(_questsim_env, m) {
       .def_property_readonly("expert_actions", [](py::object self) {
         Env& e = self.cast<Env&>();
         return view(self, const_cast<float*>(e.expert_actions()), {e.size(), Env::kActionSize});
+      })
+      .def_property_readonly("reference_obs", [](py::object self) {
+        Env& e = self.cast<Env&>();
+        return view(self, const_cast<float*>(e.reference_observations()), {e.size(), Env::kObservationSize});
+      })
+      .def_property_readonly("frames", [](py::object self) {
+        Env& e = self.cast<Env&>();
+        return view(self, const_cast<float*>(e.frames()), {e.size(), Env::kFrameSize});
+      })
+      .def_property_readonly("final_frames", [](py::object self) {
+        Env& e = self.cast<Env&>();
+        return view(self, const_cast<float*>(e.final_frames()), {e.size(), Env::kFrameSize});
       })
       .def("residual_force", &Env::root_residual_force)
       .def("sensor_positions", [](const Env& e, int i) {

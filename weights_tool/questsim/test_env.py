@@ -155,3 +155,35 @@ def test_n3p_trainer_runs_resumes_and_exports(clip_paths, tmp_path):
     with pytest.raises(SystemExit, match="expected a n3p_correction_policy"):
         train.main([d, "--task", "n3p", "--out", str(tmp_path / "bad"), "--envs", "8", "--horizon", "8", "--samples", "1920",
                     "--motions", ".", "--init-json", N3P_LOWER])
+
+
+def test_reference_observations_and_frames(clips):
+    """record_reference: at a reference-state start the reference observation equals the character's
+    (forces aside); the frames move as the world model's algebra says (worldmodel.py), and the user
+    window of step t re-expressed in the next heading frame is the next step's window."""
+    import torch
+
+    from . import worldmodel as wm
+    cfg = qe.Config()
+    assert not cfg.record_reference
+    env = qe.Env(clips, [1.6, 1.75, 1.9, 1.8], 3, cfg)
+    env.step(np.zeros((4, qe.Env.action_size), np.float32))
+    assert not env.reference_obs.any() and not env.frames.any()  # off: nothing written
+    cfg.record_reference = True
+    env = qe.Env(clips, [1.6, 1.75, 1.9, 1.8], 3, cfg)
+    ch = wm.CH - 6  # without the foot forces
+    np.testing.assert_allclose(env.obs[:, :ch], env.reference_obs[:, :ch], atol=2e-5)
+    np.testing.assert_allclose(env.frames[:, :4], env.frames[:, 4:], atol=1e-6)
+    assert not env.reference_obs[:, ch:wm.CH].any()
+    rng = np.random.default_rng(1)
+    for _ in range(10):
+        u, f0 = env.obs[:, wm.CH:-1].copy(), env.frames[:, :4].copy()
+        env.step((0.05 * rng.standard_normal((4, qe.Env.action_size))).astype(np.float32))
+        on = (env.terminated == 0) & (env.truncated == 0)
+        f1 = env.frames[:, :4]
+        d = wm.frame_delta(torch.from_numpy(f0), torch.from_numpy(f1))
+        np.testing.assert_allclose(wm.frame_apply(torch.from_numpy(f0), d).numpy(), f1, atol=1e-5)
+        ur = wm.reexpress_user(torch.from_numpy(u), torch.from_numpy(f0), torch.from_numpy(f1.copy())).numpy()
+        np.testing.assert_allclose(ur.reshape(4, 7, 27)[on, 1:], env.obs[on, wm.CH:-1].reshape(-1, 7, 27)[:, :6], atol=1e-4)
+        assert np.abs(env.frames[:, 2:4] - env.frames[:, 6:8]).max() < 1.0  # the reference stays near
+        assert np.abs(env.obs[:, ch:wm.CH]).max() > 10 and not env.reference_obs[:, ch:wm.CH].any()

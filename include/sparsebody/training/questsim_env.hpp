@@ -88,6 +88,9 @@ struct QuestSimEnvConfig {
   // Nonzero: the expert is a plain PD servo to the reference instead, a = kp (q_target (-) q) + kd (v_ref - v)
   // in units of each joint's torque limit (1/rad, s/rad): a diagnostic of what bounded torques can hold.
   double expert_pd_kp = 0, expert_pd_kd = 0;
+  // Also write reference_observations() and frames() every step: what a learned world model and a
+  // policy trained through it (SuperTrack, Fussell et al. 2021) need. Off on the PPO path.
+  bool record_reference = false;
   QuestSimRewardConfig reward{};
 };
 
@@ -132,6 +135,9 @@ class QuestSimEnv {
     expert_.assign(std::size_t(n) * kActionSize, 0.f);
     terminated_.assign(std::size_t(n), 0);
     truncated_.assign(std::size_t(n), 0);
+    ref_obs_.assign(std::size_t(n) * kObservationSize, 0.f);
+    frames_.assign(std::size_t(n) * kFrameSize, 0.f);
+    final_frames_.assign(std::size_t(n) * kFrameSize, 0.f);
     for (int i = 0; i < n; ++i) {
       restart(i);
       write_observation(i, obs_.data() + std::size_t(i) * kObservationSize);
@@ -140,6 +146,9 @@ class QuestSimEnv {
   }
 
   int size() const noexcept { return static_cast<int>(chars_.size()); }
+  // frames(): per character the floor heading frame S of the simulated state, then of the reference
+  // state: (cos theta, sin theta, origin x, origin z) each (QuestSimFloorFrame).
+  static constexpr int kFrameSize = 8;
 
   // Restart every character (new reference-state initialisations from their random streams).
   void reset_all() noexcept {
@@ -183,7 +192,14 @@ class QuestSimEnv {
   std::array<double, 2> expert_root_wrench(int i) const noexcept {
     return {double(chars_[i]->root_need), double(chars_[i]->root_left)};
   }
-  const float* expert_actions() const noexcept { return expert_.data(); }  // n x kActionSize, see above (zeros unless config().expert)  // n x 5: r(q), r(qd), r(x), r(xd), r_f
+  const float* expert_actions() const noexcept { return expert_.data(); }
+  // With config().record_reference (else zeros): the reference state s_gt at frame(i) as an
+  // observation of the same layout (its own heading frame, foot forces 0, the same user window),
+  // the heading frames of the current state (kFrameSize per character, see above) and of the
+  // final state of an episode that ended this step (first 4 values).
+  const float* reference_observations() const noexcept { return ref_obs_.data(); }
+  const float* frames() const noexcept { return frames_.data(); }
+  const float* final_frames() const noexcept { return final_frames_.data(); }  // n x kActionSize, see above (zeros unless config().expert)  // n x 5: r(q), r(qd), r(x), r(xd), r_f
   // Why each character's episode ended this step: 0 it did not, 1 a failed substep, 2 a fall,
   // 3 head farther than max_head_error from the reference, 4 a non-finite reward.
   const unsigned char* terminated() const noexcept { return terminated_.data(); }
@@ -421,6 +437,22 @@ class QuestSimEnv {
     k.builder.build(k.sim, k.window, k.height, out);
     for (int j = 0; j < kObservationSize; ++j)
       if (!std::isfinite(out[j])) out[j] = 0.f;
+    if (!cfg_.record_reference) return;
+    const bool final = out == final_obs_.data() + std::size_t(i) * kObservationSize;
+    float* fr = (final ? final_frames_.data() : frames_.data()) + std::size_t(i) * kFrameSize;
+    write_frame(k.sim.data().R[0], k.sim.data().p[0], fr);
+    if (final) return;
+    write_frame(k.ref.R[0], k.ref.p[0], fr + 4);
+    float* ro = ref_obs_.data() + std::size_t(i) * kObservationSize;
+    const std::array<dynamics::Vec3<S>, 2> no_force{dynamics::Vec3<S>::Zero(), dynamics::Vec3<S>::Zero()};
+    control::build_quest_sim_observation<NB, NJ, NF>(k.model, k.ref, k.q_ref, k.v_ref, no_force, k.window, k.height, ro);
+    for (int j = 0; j < kObservationSize; ++j)
+      if (!std::isfinite(ro[j])) ro[j] = 0.f;
+  }
+
+  static void write_frame(const dynamics::Mat3<S>& R0, const dynamics::Vec3<S>& p0, float* out) noexcept {
+    const auto f = control::QuestSimFloorFrame<S>::from_root(R0, p0);
+    out[0] = float(f.c); out[1] = float(f.s); out[2] = float(f.origin.x()); out[3] = float(f.origin.z());
   }
 
   void step_range(const float* actions, int begin, int end) noexcept {
@@ -479,6 +511,7 @@ class QuestSimEnv {
   S h_ = S(1.0 / 72);
   std::vector<std::unique_ptr<Character>> chars_;
   std::vector<float> obs_, final_obs_, reward_, terms_, expert_;
+  std::vector<float> ref_obs_, frames_, final_frames_;  // config().record_reference
   std::vector<unsigned char> terminated_, truncated_;
 };
 
