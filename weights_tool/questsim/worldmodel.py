@@ -4,7 +4,7 @@ plateau).
 
   /usr/bin/python3 -m weights_tool.questsim.worldmodel collect TRAIN_DIR --out DIR [--policy P.json] [--steps T]
   /usr/bin/python3 -m weights_tool.questsim.worldmodel fit DIR [--minutes M] [--window W]
-  /usr/bin/python3 -m weights_tool.questsim.worldmodel policy DIR [--minutes M] [--horizon H] [--init P.json]
+  /usr/bin/python3 -m weights_tool.questsim.worldmodel policy DIR [--minutes M] [--horizon H] [--init P.json] [--anchor B]
 
 What differs from the paper, and why:
 - The state is the character block of the policy's own observation (joint angles and rates, link
@@ -14,8 +14,11 @@ What differs from the paper, and why:
   The model also predicts how S moves (yaw and origin, in the old S), so that the user's sensor
   frames, which are given in the world, can be re-expressed in the predicted S, and the character's
   place in the world can be compared with the reference's.
-- The model predicts the next state directly (a residual, scaled by the per-feature spread of the
-  one-step changes), not accelerations integrated as rigid bodies.
+- As in SuperTrack the network gives velocity changes and the positions and rotations are
+  integrated (trapezoid rule, plus a small learned correction, since joint angles are rotation
+  vectors); the new S is the one the predicted root pose defines. A first version that predicted
+  the next state directly was worse than extrapolating at constant velocity (one-step link error
+  3.1 cm against 1.9 cm) after 35 minutes of fitting.
 - One round of collect -> fit -> policy, starting from the shipped PPO policy, instead of
   SuperTrack's continual data gathering.
 Data: the training environment (questsim_env.hpp) with `record_reference` (the reference state as an
@@ -110,7 +113,7 @@ def collect(a):
     o = env.obs
     S[T], U[T], R[T], F[T] = o[:, :CH], o[:, CH:L["height"]], env.reference_obs[:, :CH], env.frames
     os.makedirs(a.out, exist_ok=True)
-    np.savez(os.path.join(a.out, "data.npz"), S=S, U=U, R=R, F=F, A=A, END=END, SN=SN, FN=FN,
+    np.savez(os.path.join(a.out, a.name), S=S, U=U, R=R, F=F, A=A, END=END, SN=SN, FN=FN,
              H=np.asarray(heights, np.float32), noise=noise[:, 0])
     ends = END[END > 0]
     print(f"collected {T * N} transitions in {time.time() - t0:.0f}s: failed {np.mean(ends == 1) if ends.size else 0:.3f} "
@@ -159,28 +162,86 @@ def reexpress_user(u, fr, fp):
     return out.reshape(sh)
 
 
+DT = 1.0 / 36.0  # one control step
+
+
+def _rotate(v, phi):
+    """Rodrigues: vectors v (..., 3) rotated by rotation vectors phi (..., 3)."""
+    th = torch.sqrt((phi * phi).sum(-1, keepdim=True) + 1e-12)
+    k = phi / th
+    c, s = torch.cos(th), torch.sin(th)
+    return v * c + torch.linalg.cross(k, v, dim=-1) * s + k * (k * v).sum(-1, keepdim=True) * (1 - c)
+
+
+def _yaw_T(v, c, s):
+    """R_y(theta)^T v for vectors (..., 3), c = cos theta, s = sin theta broadcast over (...)."""
+    return torch.stack([c * v[..., 0] - s * v[..., 2], v[..., 1], s * v[..., 0] + c * v[..., 2]], -1)
+
+
 class WorldModel(tnn.Module):
-    """(s_t, a_t) -> (s_t+1, motion of S). Inputs and outputs normalised with the data's statistics."""
+    """(s_t, a_t) -> (s_t+1, motion of S), integrated as SuperTrack does: the network gives the change
+    of every velocity (links' linear and angular, joints' rates) and the next foot forces, in the old
+    frame S_t; positions and rotations follow by the trapezoid rule (plus a small learned
+    correction); the new S_t+1 is the one the new root pose defines (QuestSimFloorFrame: yaw of the
+    root's forward axis, origin under it), and everything is re-expressed in it."""
+
+    OUT = 63 + 63 + 48 + 63 + 48 + 6  # dxd, dw, dqd, x correction, q correction, next foot forces
 
     def __init__(self, stats, hidden=(512, 512, 512)):
         super().__init__()
-        sizes = [CH + NA, *hidden, CH + 3]
+        sizes = [CH + NA + 1, *hidden, self.OUT]
         self.layers = tnn.ModuleList(tnn.Linear(x, y) for x, y in zip(sizes[:-1], sizes[1:]))
         for k, v in stats.items():
             self.register_buffer(k, torch.as_tensor(v, dtype=torch.float32))
+        d = self.ds_std
+        scale = torch.cat([d[L["xd"]:L["w"]], d[L["w"]:L["f"]], d[L["qd"]:L["x"]], 0.1 * d[L["x"]:L["R"]],
+                           0.1 * d[L["q"]:L["qd"]], self.s_std[L["f"]:CH]])
+        self.register_buffer("out_scale", scale)
         with torch.no_grad():
             self.layers[-1].weight.mul_(0.1)
             self.layers[-1].bias.zero_()
 
-    def forward(self, s, a):
-        x = torch.cat([(s - self.s_mean) / self.s_std, a], -1)
+    def forward(self, s, a, h):
+        """h: the character's height (m), (..., 1): the same torques move a smaller body faster."""
+        x = torch.cat([(s - self.s_mean) / self.s_std, a, (h - 1.7) / 0.15], -1)
         for i, l in enumerate(self.layers):
             x = l(x)
             if i + 1 < len(self.layers):
                 x = torch.nn.functional.elu(x)
-        ds = x[..., :CH] * self.ds_std + self.ds_mean
-        df = x[..., CH:] * self.df_std + self.df_mean
-        return s + ds, df
+        y = x * self.out_scale
+        B = s.shape[:-1]
+        g = lambda lo, hi: s[..., L[lo]:L[hi]]
+        q, qd = g("q", "qd"), g("qd", "x")
+        xp, R6 = g("x", "R").reshape(*B, 21, 3), g("R", "xd").reshape(*B, 21, 6)
+        v, w = g("xd", "w").reshape(*B, 21, 3), g("w", "f").reshape(*B, 21, 3)
+        o = 0
+        def take(n):
+            nonlocal o
+            o += n
+            return y[..., o - n:o]
+        v1 = v + take(63).reshape(*B, 21, 3)
+        w1 = w + take(63).reshape(*B, 21, 3)
+        qd1 = qd + take(48)
+        x1 = xp + 0.5 * DT * (v + v1) + take(63).reshape(*B, 21, 3)
+        q1 = q + 0.5 * DT * (qd + qd1) + take(48)
+        f1 = take(6).reshape(*B, 2, 3)
+        phi = 0.5 * DT * (w + w1)
+        c0, c1 = _rotate(R6[..., :3], phi), _rotate(R6[..., 3:], phi)
+        c0 = c0 / torch.linalg.norm(c0, dim=-1, keepdim=True)
+        c1 = c1 - (c0 * c1).sum(-1, keepdim=True) * c0
+        c1 = c1 / torch.linalg.norm(c1, dim=-1, keepdim=True)
+        # S_t+1 in S_t: yaw of the root's forward axis (third column), origin under the root
+        fwd = torch.linalg.cross(c0[..., 0, :], c1[..., 0, :], dim=-1)
+        th = torch.atan2(fwd[..., 0], fwd[..., 2])
+        dx, dz = x1[..., 0, 0], x1[..., 0, 2]
+        c, sn = torch.cos(th)[..., None], torch.sin(th)[..., None]
+        off = torch.stack([dx, torch.zeros_like(dx), dz], -1)[..., None, :]
+        x1 = _yaw_T(x1 - off, c, sn)
+        c0, c1, v1, w1 = _yaw_T(c0, c, sn), _yaw_T(c1, c, sn), _yaw_T(v1, c, sn), _yaw_T(w1, c, sn)
+        f1 = _yaw_T(f1, c, sn)
+        out = torch.cat([q1, qd1, x1.flatten(-2), torch.cat([c0, c1], -1).flatten(-2), v1.flatten(-2), w1.flatten(-2),
+                         f1.flatten(-2)], -1)
+        return out, torch.stack([th, dx, dz], -1)
 
 
 STATS = ("s_mean", "s_std", "ds_mean", "ds_std", "df_mean", "df_std")
@@ -194,8 +255,12 @@ def load_worldmodel(path):
 
 
 def load_data(d):
-    z = np.load(os.path.join(d, "data.npz"))
-    return {k: z[k] for k in z.files}
+    """DIR/data*.npz (one per collection round, the same number of steps), characters side by side."""
+    import glob
+    parts = [np.load(p) for p in sorted(glob.glob(os.path.join(d, "data*.npz")))]
+    if not parts:
+        raise SystemExit(f"{d}: no data*.npz (run collect first)")
+    return {k: np.concatenate([z[k] for z in parts], axis=0 if k in ("H", "noise") else 1) for k in parts[0].files}
 
 
 def windows(END, W, allow_last_end=True):
@@ -222,11 +287,11 @@ def stats_of(D):
             "ds_std": np.maximum(ds.std(0), 1e-4), "df_mean": df.mean(0), "df_std": np.maximum(df.std(0), 1e-4)}
 
 
-def rollout_model(wm, S0, F0, A):
-    """Roll the model over actions A (B, W, NA) from S0 (B, CH), F0 (B, 4): states (B, W, CH), frames (B, W, 4)."""
+def rollout_model(wm, S0, F0, A, h):
+    """Roll the model over actions A (B, W, NA) from S0 (B, CH), F0 (B, 4), heights h (B, 1): states (B, W, CH), frames (B, W, 4)."""
     s, f, ss, fs = S0, F0, [], []
     for k in range(A.shape[1]):
-        s, df = wm(s, A[:, k])
+        s, df = wm(s, A[:, k], h)
         f = frame_apply(f, df)
         ss.append(s); fs.append(f)
     return torch.stack(ss, 1), torch.stack(fs, 1)
@@ -238,7 +303,7 @@ def wm_loss(wm, D, t, i, W):
     S0 = torch.from_numpy(S[t, i]); F0 = torch.from_numpy(F[t, i, :4])
     Aw = torch.from_numpy(A[idx, i[:, None]])
     St = torch.from_numpy(SN[idx, i[:, None]]); Ft = torch.from_numpy(FN[idx, i[:, None]])
-    ps, pf = rollout_model(wm, S0, F0, Aw)
+    ps, pf = rollout_model(wm, S0, F0, Aw, torch.from_numpy(D["H"][i])[:, None])
     ls = ((ps - St).abs() / wm.s_std).mean()
     lf = ((pf[..., 2:] - Ft[..., 2:]).abs().mean() / 0.05 + (pf[..., :2] - Ft[..., :2]).abs().mean() / 0.05)
     return ls + 0.1 * lf, ls.item(), lf.item()
@@ -292,7 +357,7 @@ def report_errors(wm, D, tva, iva, rng, W=8):
     idx = t[:, None] + np.arange(W)[None]
     with torch.no_grad():
         ps, pf = rollout_model(wm, torch.from_numpy(D["S"][t, i]), torch.from_numpy(D["F"][t, i, :4]),
-                               torch.from_numpy(D["A"][idx, i[:, None]]))
+                               torch.from_numpy(D["A"][idx, i[:, None]]), torch.from_numpy(D["H"][i])[:, None])
     St, Ft = D["SN"][idx, i[:, None]], D["FN"][idx, i[:, None]]
     ps, pf = ps.numpy(), pf.numpy()
     out = {}
@@ -314,6 +379,9 @@ def policy_train(a):
     for p in wm.parameters():
         p.requires_grad_(False)
     pol, (mu, sd), doc = load_policy(a.init)
+    anchor, _, _ = load_policy(a.init)  # trust region: the model is only right near the data's actions
+    for p in anchor.parameters():
+        p.requires_grad_(False)
     out_pt = os.path.join(a.dir, "policy.pt")
     it = 0
     if a.resume and os.path.exists(out_pt):
@@ -336,13 +404,16 @@ def policy_train(a):
         Rf = torch.from_numpy(D["R"][idx, ii[:, None]])
         s, f = torch.from_numpy(D["S"][tt, ii]), Fr[:, 0, :4]
         h = Hgt[ii][:, None]
-        loss_s, loss_w, loss_a = 0.0, 0.0, 0.0
+        loss_s, loss_w, loss_a, loss_anchor = 0.0, 0.0, 0.0, torch.zeros(())
         for k in range(H):
             u = reexpress_user(U[:, k], Fr[:, k, :4], f)
             obs = torch.cat([s, u, h], -1)
-            act = pol((obs - mu) / sd)[0]
+            xin = (obs - mu) / sd
+            act = pol(xin)[0]
+            if a.anchor > 0:
+                loss_anchor = loss_anchor + (act - anchor(xin)[0]).pow(2).mean()
             act = (act + a.noise * torch.randn_like(act)).clamp(-1, 1)
-            s, df = wm(s, act)
+            s, df = wm(s, act, h)
             f = frame_apply(f, df)
             ref, fref = Rf[:, k + 1], Fr[:, k + 1, 4:]
             for name, (lo, hi, w) in GROUPS.items():
@@ -350,20 +421,23 @@ def policy_train(a):
             dyaw = torch.atan2(f[:, 1] * fref[:, 0] - f[:, 0] * fref[:, 1], f[:, 0] * fref[:, 0] + f[:, 1] * fref[:, 1])
             loss_w = loss_w + (f[:, 2:] - fref[:, 2:]).abs().sum(-1).mean() / 0.1 + dyaw.abs().mean() / 0.2
             loss_a = loss_a + act.pow(2).mean()
-        loss = (loss_s + a.world_weight * loss_w + a.action_weight * loss_a) / H
+        loss = (loss_s + a.world_weight * loss_w + a.action_weight * loss_a + a.anchor * loss_anchor) / H
         opt.zero_grad(); loss.backward()
         tnn.utils.clip_grad_norm_(pol.parameters(), 1.0)
         opt.step(); it += 1
         if it % 20 == 0:
             print(f"it {it} {time.time() - t0:.0f}s loss {loss.item():.4f} state {loss_s.item() / H:.4f} "
-                  f"world {loss_w.item() / H:.4f} action {loss_a.item() / H:.4f}", flush=True)
-            log.write(f"{it},{time.time() - t0:.1f},{loss.item()},{loss_s.item() / H},{loss_w.item() / H},{loss_a.item() / H}\n"); log.flush()
+                  f"world {loss_w.item() / H:.4f} action {loss_a.item() / H:.4f} anchor {loss_anchor.item() / H:.5f}", flush=True)
+            log.write(f"{it},{time.time() - t0:.1f},{loss.item()},{loss_s.item() / H},{loss_w.item() / H},{loss_a.item() / H},{loss_anchor.item() / H}\n"); log.flush()
         if it % 100 == 0:
             save_policy(a, pol, mu, sd, doc, it, out_pt)
+        if it % a.snapshot == 0:  # for evaluations through the pipeline (evaluate.py) along the way
+            os.makedirs(os.path.join(a.dir, "snapshots"), exist_ok=True)
+            save_policy(a, pol, mu, sd, doc, it, out_pt, os.path.join(a.dir, "snapshots", f"policy_{it:06d}.json"))
     save_policy(a, pol, mu, sd, doc, it, out_pt)
 
 
-def save_policy(a, pol, mu, sd, doc, it, out_pt):
+def save_policy(a, pol, mu, sd, doc, it, out_pt, json_path=None):
     torch.save({"policy": pol.state_dict(), "iteration": it}, out_pt)
     meta = dict(doc.get("meta", {}))
     for k in ("input_size", "output_size"):
@@ -371,8 +445,29 @@ def save_policy(a, pol, mu, sd, doc, it, out_pt):
     meta.update({"worldmodel_iterations": it, "worldmodel_init": os.path.basename(a.init),
                  "training": "SuperTrack-style: backpropagation through a learned world model (weights_tool/questsim/worldmodel.py)",
                  "credit": CREDIT, "license": "CC BY-NC 4.0", "non_commercial": NON_COMMERCIAL})
-    write_weights(os.path.join(a.dir, "questsim_policy_wm.json"), nets.export_state_dict(pol), "questsim_policy",
+    write_weights(json_path or os.path.join(a.dir, "questsim_policy_wm.json"), nets.export_state_dict(pol), "questsim_policy",
                   L["size"], NA, meta=meta, normalization={"input_mean": mu.numpy(), "input_std": sd.numpy()})
+
+
+def plot(a):
+    """fit_log.csv (world model: rollout loss on training batches and held-out windows) and
+    policy_log.csv (policy: losses along the model's rollouts) -> one PNG."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 2, figsize=(12, 4))
+    f = np.loadtxt(os.path.join(a.dir, "fit_log.csv"), delimiter=",", ndmin=2)
+    ax[0].plot(f[:, 0], f[:, 2], lw=0.6, label="state, training batch")
+    ax[0].plot(f[:, 0], f[:, 4], label="state, held-out windows")
+    ax[0].set_xlabel("updates (256 windows of 8 steps)"); ax[0].set_ylabel("L1 / feature spread, mean over 8 steps")
+    ax[0].set_title("world model"); ax[0].legend(fontsize=7)
+    pp = os.path.join(a.dir, "policy_log.csv")
+    if os.path.exists(pp):
+        g = np.loadtxt(pp, delimiter=",", ndmin=2)
+        for k, name in ((3, "state"), (4, "world (root place, yaw)"), (2, "total")):
+            ax[1].plot(g[:, 0], g[:, k], lw=0.8, label=name)
+        ax[1].set_xlabel("updates"); ax[1].set_title("policy through the model"); ax[1].legend(fontsize=7)
+    fig.tight_layout(); fig.savefig(a.output, dpi=90); plt.close(fig)
 
 
 def main(argv=None):
@@ -384,6 +479,7 @@ def main(argv=None):
     c.add_argument("--envs", type=int, default=192); c.add_argument("--steps", type=int, default=1200)
     c.add_argument("--noise", type=float, nargs=2, default=(0.02, 0.25))
     c.add_argument("--env-threads", type=int, default=2)
+    c.add_argument("--name", default="data.npz", help="file under --out (data*.npz: every round is used by fit and policy)")
     f = sub.add_parser("fit")
     f.add_argument("dir"); f.add_argument("--minutes", type=float, default=20)
     f.add_argument("--window", type=int, default=8); f.add_argument("--batch", type=int, default=256)
@@ -394,11 +490,15 @@ def main(argv=None):
     p.add_argument("--batch", type=int, default=128); p.add_argument("--lr", type=float, default=3e-5)
     p.add_argument("--noise", type=float, default=0.05)
     p.add_argument("--world-weight", type=float, default=1.0); p.add_argument("--action-weight", type=float, default=0.01)
+    p.add_argument("--snapshot", type=int, default=500, help="keep a policy JSON every this many updates")
+    p.add_argument("--anchor", type=float, default=0.0, help="weight of |pi(s) - pi_init(s)|^2 along the rollouts (a trust region)")
     p.add_argument("--resume", action="store_true")
+    g = sub.add_parser("plot")
+    g.add_argument("dir"); g.add_argument("-o", "--output", required=True)
     for s in (c, f, p):
         s.add_argument("--threads", type=int, default=2); s.add_argument("--seed", type=int, default=1)
     a = ap.parse_args(argv)
-    {"collect": collect, "fit": fit, "policy": policy_train}[a.cmd](a)
+    {"collect": collect, "fit": fit, "policy": policy_train, "plot": plot}[a.cmd](a)
 
 
 if __name__ == "__main__":
