@@ -4,6 +4,8 @@ plateau).
 
   /usr/bin/python3 -m weights_tool.questsim.worldmodel collect TRAIN_DIR --out DIR [--policy P.json] [--steps T]
   /usr/bin/python3 -m weights_tool.questsim.worldmodel fit DIR [--minutes M] [--window W]
+  /usr/bin/python3 -m weights_tool.questsim.worldmodel errors DIR [--model M.pt] [--json OUT]
+  /usr/bin/python3 -m weights_tool.questsim.worldmodel plot DIR -o CURVE.png
   /usr/bin/python3 -m weights_tool.questsim.worldmodel policy DIR [--minutes M] [--horizon H] [--init P.json] [--anchor B]
 
 What differs from the paper, and why:
@@ -346,7 +348,10 @@ def fit(a):
 
 
 def report_errors(wm, D, tva, iva, rng, W=8):
-    """1-step and W-step rollout errors on held-out windows, in the units that matter."""
+    """1-step and W-step rollout errors on held-out windows, in the units that matter, beside two
+    baselines on the same windows: nothing moves, and the same integrator with the network's output
+    zeroed (every velocity held: constant-velocity extrapolation)."""
+    import copy
     t, i = tva, iva
     sel = rng.choice(len(t), min(2048, len(t)), replace=False)
     t, i = t[sel], i[sel]
@@ -355,19 +360,39 @@ def report_errors(wm, D, tva, iva, rng, W=8):
     keep = np.array([not (e[tt:tt + W - 1, ii] > 0).any() and tt + W <= e.shape[0] for tt, ii in zip(t, i)])
     t, i = t[keep], i[keep]
     idx = t[:, None] + np.arange(W)[None]
-    with torch.no_grad():
-        ps, pf = rollout_model(wm, torch.from_numpy(D["S"][t, i]), torch.from_numpy(D["F"][t, i, :4]),
-                               torch.from_numpy(D["A"][idx, i[:, None]]), torch.from_numpy(D["H"][i])[:, None])
     St, Ft = D["SN"][idx, i[:, None]], D["FN"][idx, i[:, None]]
-    ps, pf = ps.numpy(), pf.numpy()
-    out = {}
-    for k in (0, W - 1):
-        x = np.linalg.norm((ps[:, k, L["x"]:L["R"]] - St[:, k, L["x"]:L["R"]]).reshape(-1, 21, 3), axis=-1).mean()
-        root = np.linalg.norm(pf[:, k, 2:] - Ft[:, k, 2:], axis=-1).mean()
-        q = np.abs(ps[:, k, :L["qd"]] - St[:, k, :L["qd"]]).mean()
-        out[f"step{k + 1}"] = {"link_position_cm": 100 * float(x), "root_xz_cm": 100 * float(root), "joint_rad": float(q)}
+    still = copy.deepcopy(wm)
+    with torch.no_grad():
+        still.layers[-1].weight.zero_(); still.layers[-1].bias.zero_()
+    out = {"windows": int(len(t))}
+    S0, F0 = D["S"][t, i], D["F"][t, i, :4]
+    for name, m in (("model", wm), ("constant_velocity", still), ("no_change", None)):
+        if m is None:
+            ps, pf = np.repeat(S0[:, None], W, 1), np.repeat(F0[:, None], W, 1)
+        else:
+            with torch.no_grad():
+                ps, pf = rollout_model(m, torch.from_numpy(S0), torch.from_numpy(F0), torch.from_numpy(D["A"][idx, i[:, None]]),
+                                       torch.from_numpy(D["H"][i])[:, None])
+            ps, pf = ps.numpy(), pf.numpy()
+        for k in (0, W - 1):
+            x = np.linalg.norm((ps[:, k, L["x"]:L["R"]] - St[:, k, L["x"]:L["R"]]).reshape(-1, 21, 3), axis=-1).mean()
+            root = np.linalg.norm(pf[:, k, 2:] - Ft[:, k, 2:], axis=-1).mean()
+            q = np.abs(ps[:, k, :L["qd"]] - St[:, k, :L["qd"]]).mean()
+            out[f"{name}_step{k + 1}"] = {"link_position_cm": round(100 * float(x), 3), "root_xz_cm": round(100 * float(root), 3),
+                                          "joint_rad": round(float(q), 4)}
     print(json.dumps(out), flush=True)
     return out
+
+
+def errors(a):
+    """The report of fit's end for a saved model, on the held-out last 10 % of the collection's steps."""
+    torch.set_num_threads(a.threads)
+    D = load_data(a.dir)
+    wm, _ = load_worldmodel(a.model or os.path.join(a.dir, "worldmodel.pt"))
+    T = D["END"].shape[0]
+    t, i = windows(D["END"], 8)
+    va = t >= int(T * 0.9)
+    json.dump(report_errors(wm, D, t[va], i[va], np.random.default_rng(a.seed)), open(a.json, "w") if a.json else open(os.devnull, "w"), indent=1)
 
 
 # ------------------------------------------------------------------------------------------ policy
@@ -493,12 +518,14 @@ def main(argv=None):
     p.add_argument("--snapshot", type=int, default=500, help="keep a policy JSON every this many updates")
     p.add_argument("--anchor", type=float, default=0.0, help="weight of |pi(s) - pi_init(s)|^2 along the rollouts (a trust region)")
     p.add_argument("--resume", action="store_true")
+    r = sub.add_parser("errors")
+    r.add_argument("dir"); r.add_argument("--model", default=""); r.add_argument("--json", default="")
     g = sub.add_parser("plot")
     g.add_argument("dir"); g.add_argument("-o", "--output", required=True)
-    for s in (c, f, p):
+    for s in (c, f, p, r):
         s.add_argument("--threads", type=int, default=2); s.add_argument("--seed", type=int, default=1)
     a = ap.parse_args(argv)
-    {"collect": collect, "fit": fit, "policy": policy_train, "plot": plot}[a.cmd](a)
+    {"collect": collect, "fit": fit, "policy": policy_train, "plot": plot, "errors": errors}[a.cmd](a)
 
 
 if __name__ == "__main__":
