@@ -13,7 +13,7 @@ What differs from the paper, and why:
   positions, 6D rotations, linear and angular velocities in the floor heading frame S, foot forces:
   417 values; layout.py), not world-space rigid bodies: the policy's input is then rebuilt from the
   model's prediction without any kinematics, and the model is heading-invariant by construction.
-  The model also predicts how S moves (yaw and origin, in the old S), so that the user's sensor
+  The rollout also carries where S is in the world (yaw and origin), so that the user's sensor
   frames, which are given in the world, can be re-expressed in the predicted S, and the character's
   place in the world can be compared with the reference's.
 - As in SuperTrack the network gives velocity changes and the positions and rotations are
@@ -21,8 +21,9 @@ What differs from the paper, and why:
   vectors); the new S is the one the predicted root pose defines. A first version that predicted
   the next state directly was worse than extrapolating at constant velocity (one-step link error
   3.1 cm against 1.9 cm) after 35 minutes of fitting.
-- One round of collect -> fit -> policy, starting from the shipped PPO policy, instead of
-  SuperTrack's continual data gathering.
+- Rounds of collect -> fit (--resume) -> policy, each policy starting from the shipped PPO one
+  (a round's data: --name data2.npz ...; every DIR/data*.npz is used), instead of SuperTrack's
+  continual data gathering. The README's QuestSim training section has what two rounds gave.
 Data: the training environment (questsim_env.hpp) with `record_reference` (the reference state as an
 observation of the same layout, and the heading frames), driven by a policy plus Gaussian noise of
 a per-character scale. Never committed: DIR lives outside the repository.
