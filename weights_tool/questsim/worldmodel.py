@@ -247,7 +247,7 @@ class WorldModel(tnn.Module):
         return out, torch.stack([th, dx, dz], -1)
 
 
-STATS = ("s_mean", "s_std", "ds_mean", "ds_std", "df_mean", "df_std")
+STATS = ("s_mean", "s_std", "ds_std")
 
 
 def load_worldmodel(path):
@@ -284,10 +284,8 @@ def stats_of(D):
     good = END != 1
     s = S[:-1][good]
     ds = (SN - S[:-1])[good]
-    f0, f1 = torch.from_numpy(D["F"][:-1, :, :4][good]), torch.from_numpy(D["FN"][good])
-    df = frame_delta(f0, f1).numpy()
-    return {"s_mean": s.mean(0), "s_std": np.maximum(s.std(0), 1e-3), "ds_mean": ds.mean(0),
-            "ds_std": np.maximum(ds.std(0), 1e-4), "df_mean": df.mean(0), "df_std": np.maximum(df.std(0), 1e-4)}
+    return {"s_mean": s.mean(0), "s_std": np.maximum(s.std(0), 1e-3),
+            "ds_std": np.maximum(ds.std(0), 1e-4)}
 
 
 def rollout_model(wm, S0, F0, A, h):

@@ -438,10 +438,8 @@ class QuestSimEnv {
     for (int j = 0; j < kObservationSize; ++j)
       if (!std::isfinite(out[j])) out[j] = 0.f;
     if (!cfg_.record_reference) return;
-    const bool final = out == final_obs_.data() + std::size_t(i) * kObservationSize;
-    float* fr = (final ? final_frames_.data() : frames_.data()) + std::size_t(i) * kFrameSize;
+    float* fr = frames_.data() + std::size_t(i) * kFrameSize;
     write_frame(k.sim.data().R[0], k.sim.data().p[0], fr);
-    if (final) return;
     write_frame(k.ref.R[0], k.ref.p[0], fr + 4);
     float* ro = ref_obs_.data() + std::size_t(i) * kObservationSize;
     const std::array<dynamics::Vec3<S>, 2> no_force{dynamics::Vec3<S>::Zero(), dynamics::Vec3<S>::Zero()};
@@ -498,7 +496,10 @@ class QuestSimEnv {
     truncated_[i] = trunc;
     float* o = obs_.data() + std::size_t(i) * kObservationSize;
     if (term || trunc) {
-      if (!failed) write_observation(i, final_obs_.data() + std::size_t(i) * kObservationSize);
+      if (!failed) {
+        write_observation(i, final_obs_.data() + std::size_t(i) * kObservationSize);
+        if (cfg_.record_reference) std::copy_n(frames_.data() + std::size_t(i) * kFrameSize, 4, final_frames_.data() + std::size_t(i) * kFrameSize);
+      }
       restart(i);
     }
     write_observation(i, o);
