@@ -118,3 +118,24 @@ def test_trainer_starts_from_an_exported_policy(tmp_path):
     assert np.allclose(got.std(0.05), want_std, rtol=1e-5)
     with pytest.raises(SystemExit, match="expected a questsim_policy 600 -> 48"):
         train.init_from_json(path, train.ActorCritic(600, n_act, 0.05), train.RunningStats(600), 600, n_act)
+
+
+def test_world_model_policy_loader_checks_kind_and_size(tmp_path):
+    # worldmodel.load_policy reads the shipped policy's tensors and refuses any other kind or shape
+    # with the trainer's one-line message (it used to load whatever tensors a file held).
+    from weights_tool.questsim import train, worldmodel
+    n_obs, n_act = worldmodel.L["size"], worldmodel.NA
+    src = train.ActorCritic(n_obs, n_act, 0.05)
+    stats = train.RunningStats(n_obs)
+    stats.update(np.random.default_rng(2).normal(0.0, 1.0, (50, n_obs)))
+    good = str(tmp_path / "good.json")
+    train.export(good, src, stats, n_obs, n_act, {"samples": 1, "iterations": 1})
+    m, _, doc = worldmodel.load_policy(good)
+    assert doc["kind"] == "questsim_policy"
+    for a, b in zip(src.actor.parameters(), m.parameters()):
+        assert torch.equal(a, b)
+    other = str(tmp_path / "n3p.json")
+    small = train.ActorCritic(1008, n_act, 0.05, train.N3P_HIDDEN, "n3p_correction_policy")
+    train.export_n3p(other, small, train.RunningStats(1008), 1008, n_act, {"samples": 1})
+    with pytest.raises(SystemExit, match=f"n3p.json: expected a questsim_policy {n_obs} -> {n_act}, found n3p_correction_policy 1008"):
+        worldmodel.load_policy(other)

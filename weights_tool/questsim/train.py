@@ -138,18 +138,25 @@ def export_n3p(path, model, stats, n_obs, n_act, info):
                   normalization={"input_mean": stats.mean.astype(np.float32), "input_std": stats.std(0.05).astype(np.float32)})
 
 
+def load_policy_tensors(path, doc, tensors, actor, kind, n_obs, n_act):
+    """Loads an exported policy's tensors (read_weights) into actor after checking that the file is
+    a `kind` of n_obs -> n_act with the actor's own tensors (SystemExit naming the file otherwise)."""
+    meta = doc.get("meta", {})
+    if doc.get("kind") != kind or meta.get("input_size") != n_obs or meta.get("output_size") != n_act:
+        raise SystemExit(f"{path}: expected a {kind} {n_obs} -> {n_act}, found {doc.get('kind')} "
+                         f"{meta.get('input_size')} -> {meta.get('output_size')}")
+    own = actor.state_dict()
+    if set(own) != set(tensors):
+        raise SystemExit(f"{path}: tensors {sorted(tensors)} do not match the policy's {sorted(own)}")
+    actor.load_state_dict({k: torch.tensor(v, dtype=own[k].dtype).reshape(own[k].shape) for k, v in tensors.items()})
+
+
 def init_from_json(path, model, stats, n_obs, n_act, kind="questsim_policy"):
     """Loads an exported policy (export() above) into model.actor and stats; returns (iteration, samples).
     The checkpoint's optimiser state and critic are not in the export: Adam and the critic start afresh."""
     doc, tensors, norm = read_weights(path)
     meta = doc.get("meta", {})
-    if doc.get("kind") != kind or meta.get("input_size") != n_obs or meta.get("output_size") != n_act:
-        raise SystemExit(f"{path}: expected a {kind} {n_obs} -> {n_act}, found {doc.get('kind')} "
-                         f"{meta.get('input_size')} -> {meta.get('output_size')}")
-    own = model.actor.state_dict()
-    if set(own) != set(tensors):
-        raise SystemExit(f"{path}: tensors {sorted(tensors)} do not match the policy's {sorted(own)}")
-    model.actor.load_state_dict({k: torch.tensor(v, dtype=own[k].dtype).reshape(own[k].shape) for k, v in tensors.items()})
+    load_policy_tensors(path, doc, tensors, model.actor, kind, n_obs, n_act)
     n = int(meta.get("samples", 1_000_000))
     std = np.asarray(norm["input_std"], np.float64)
     stats.n, stats.mean = n, np.asarray(norm["input_mean"], np.float64)

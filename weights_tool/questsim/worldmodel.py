@@ -47,7 +47,7 @@ from ..format import read_weights, write_weights
 from .env import ROOT, load_module
 from .layout import layout
 from .policy import HIDDEN
-from .train import CREDIT, DEFAULT_MOTIONS, NON_COMMERCIAL, pick_clips
+from .train import CREDIT, DEFAULT_MOTIONS, NON_COMMERCIAL, load_policy_tensors, pick_clips
 
 L = layout(21, 48, 6)
 CH = L["user"]            # 417: q, qd, x, R6, xd, w, foot forces
@@ -62,8 +62,7 @@ GROUPS = {"q": (L["q"], L["qd"], 1.0), "qd": (L["qd"], L["x"], 0.2), "x": (L["x"
 def load_policy(path):
     doc, tensors, norm = read_weights(path)
     m = nets.MLPPolicy([L["size"], *HIDDEN, NA], "tanh", "tanh", "questsim_policy")
-    own = m.state_dict()
-    m.load_state_dict({k: torch.tensor(v, dtype=torch.float32).reshape(own[k].shape) for k, v in tensors.items()})
+    load_policy_tensors(path, doc, tensors, m, "questsim_policy", L["size"], NA)
     return m, (torch.tensor(norm["input_mean"], dtype=torch.float32), torch.tensor(norm["input_std"], dtype=torch.float32)), doc
 
 
