@@ -187,3 +187,17 @@ def test_reference_observations_and_frames(clips):
         np.testing.assert_allclose(ur.reshape(4, 7, 27)[on, 1:], env.obs[on, wm.CH:-1].reshape(-1, 7, 27)[:, :6], atol=1e-4)
         assert np.abs(env.frames[:, 2:4] - env.frames[:, 6:8]).max() < 1.0  # the reference stays near
         assert np.abs(env.obs[:, ch:wm.CH]).max() > 10 and not env.reference_obs[:, ch:wm.CH].any()
+
+
+def test_predicted_references_load_as_training_clips(clip_paths, clips30, tmp_path):
+    # Direct mode's predictions, written as the demo's BVH, load as the n3p environment's reference
+    # clips under the clips' own names, with the clips' frame counts (one row per input frame).
+    from . import predicted_references
+    src = os.path.dirname(clip_paths[0])
+    out = tmp_path / "pred"
+    assert predicted_references.main([src, str(out), "--motions", "."]) == 0
+    names = sorted(os.listdir(out))
+    assert names == sorted(os.path.basename(p) for p in os.listdir(src) if p.endswith(".bvh"))
+    pred = qe.load_clips([str(out / os.path.basename(p)) for p in clip_paths], N3P_LOWER, 30.0)
+    for i in range(len(clip_paths)):
+        assert abs(pred.frames(i) - clips30.frames(i)) <= 1, (clip_paths[i], pred.frames(i), clips30.frames(i))

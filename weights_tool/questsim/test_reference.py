@@ -139,3 +139,19 @@ def test_world_model_policy_loader_checks_kind_and_size(tmp_path):
     train.export_n3p(other, small, train.RunningStats(1008), 1008, n_act, {"samples": 1})
     with pytest.raises(SystemExit, match=f"n3p.json: expected a questsim_policy {n_obs} -> {n_act}, found n3p_correction_policy 1008"):
         worldmodel.load_policy(other)
+
+
+def test_pipeline_evals_parser_reads_both_log_formats(tmp_path):
+    # plot_pipeline_evals reads the snapshot loops' lines (the older short form and the full
+    # n3p_physics_eval summary) and skips anything else.
+    from weights_tool.questsim import plot_pipeline_evals as pe
+    f = tmp_path / "evals.txt"
+    f.write_text("0142 samples 3276800 half 1 physics  MPJPE  21.49 cm ; 30.90 per minute of output\n"
+                 "a line to skip\n"
+                 "samples 1843200 half 0 physics  MPJPE  23.91 cm (upper 1, lower 2) | foot skating  49.48 cm/s | "
+                 "falls 314 (height 175, tilt 71, diverged 68; 28.72 per minute of output), failed steps 2\n"
+                 "samples 1000 half 0 physics  MPJPE  30.00 cm ; 40.00 per minute of output\n")
+    got = pe.read_evals(str(f))
+    assert got == {0: [(1000, 40.0, 30.0), (1843200, 28.72, 23.91)], 1: [(3276800, 30.9, 21.49)]}
+    png = tmp_path / "p.png"
+    assert pe.main([str(png), str(f), "--labels", "run", "--baseline", "26.6"]) == 0 and png.stat().st_size > 0
