@@ -8,6 +8,7 @@
 
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "sparsebody/predict/n3p_predictor.hpp"
@@ -43,37 +44,32 @@ py::array view(py::object owner, T* data, std::vector<py::ssize_t> shape) {
   return py::array_t<T>(shape, data, owner);
 }
 
+// A read-only property `name`: the zero-copy view of get(env), [size] when cols is 0, else
+// [size, cols]; the view keeps the environment alive.
+template <class E, class Get>
+void bind_view(py::class_<E>& c, const char* name, Get get, int cols) {
+  c.def_property_readonly(name, [get, cols](py::object self) {
+    E& e = self.cast<E&>();
+    using T = std::remove_const_t<std::remove_pointer_t<decltype(get(e))>>;
+    std::vector<py::ssize_t> shape{e.size()};
+    if (cols) shape.push_back(cols);
+    return view(self, const_cast<T*>(get(e)), shape);
+  });
+}
+
 // What both environments bind alike: sizes, zero-copy views of their buffers, step and the
 // per-character queries. `terms`: columns of reward_terms.
 template <class E>
 void bind_common(py::class_<E>& c, int terms) {
+  bind_view(c, "obs", [](E& e) { return e.observations(); }, E::kObservationSize);
+  bind_view(c, "final_obs", [](E& e) { return e.final_observations(); }, E::kObservationSize);
+  bind_view(c, "reward", [](E& e) { return e.rewards(); }, 0);
+  bind_view(c, "reward_terms", [](E& e) { return e.reward_terms(); }, terms);
+  bind_view(c, "terminated", [](E& e) { return e.terminated(); }, 0);
+  bind_view(c, "truncated", [](E& e) { return e.truncated(); }, 0);
   c.def_property_readonly_static("obs_size", [](py::object) { return E::kObservationSize; })
       .def_property_readonly_static("action_size", [](py::object) { return E::kActionSize; })
       .def("__len__", &E::size)
-      .def_property_readonly("obs", [](py::object self) {
-        E& e = self.cast<E&>();
-        return view(self, e.observations(), {e.size(), E::kObservationSize});
-      })
-      .def_property_readonly("final_obs", [](py::object self) {
-        E& e = self.cast<E&>();
-        return view(self, const_cast<float*>(e.final_observations()), {e.size(), E::kObservationSize});
-      })
-      .def_property_readonly("reward", [](py::object self) {
-        E& e = self.cast<E&>();
-        return view(self, const_cast<float*>(e.rewards()), {e.size()});
-      })
-      .def_property_readonly("reward_terms", [terms](py::object self) {
-        E& e = self.cast<E&>();
-        return view(self, const_cast<float*>(e.reward_terms()), {e.size(), terms});
-      })
-      .def_property_readonly("terminated", [](py::object self) {
-        E& e = self.cast<E&>();
-        return view(self, const_cast<unsigned char*>(e.terminated()), {e.size()});
-      })
-      .def_property_readonly("truncated", [](py::object self) {
-        E& e = self.cast<E&>();
-        return view(self, const_cast<unsigned char*>(e.truncated()), {e.size()});
-      })
       .def("step", [](E& e, py::array_t<float, py::array::c_style> a, int threads) {
         if (a.ndim() != 2 || a.shape(0) != e.size() || a.shape(1) != E::kActionSize)
           throw py::value_error("actions: expected float32 [" + std::to_string(e.size()) + ", " +
@@ -138,25 +134,13 @@ PYBIND11_MODULE(_questsim_env, m) {
 
   py::class_<Env> env(m, "Env");
   bind_common(env, 5);
+  bind_view(env, "expert_actions", [](Env& e) { return e.expert_actions(); }, Env::kActionSize);
+  bind_view(env, "reference_obs", [](Env& e) { return e.reference_observations(); }, Env::kObservationSize);
+  bind_view(env, "frames", [](Env& e) { return e.frames(); }, Env::kFrameSize);
+  bind_view(env, "final_frames", [](Env& e) { return e.final_frames(); }, Env::kFrameSize);
   env.def(py::init([](std::shared_ptr<Clips> c, const std::vector<double>& heights, unsigned long long seed,
                       training::QuestSimEnvConfig cfg) { return std::make_unique<Env>(c->clips, c->meta, heights, seed, cfg); }),
           py::arg("clips"), py::arg("heights"), py::arg("seed") = 0, py::arg("config") = training::QuestSimEnvConfig{})
-      .def_property_readonly("expert_actions", [](py::object self) {
-        Env& e = self.cast<Env&>();
-        return view(self, const_cast<float*>(e.expert_actions()), {e.size(), Env::kActionSize});
-      })
-      .def_property_readonly("reference_obs", [](py::object self) {
-        Env& e = self.cast<Env&>();
-        return view(self, const_cast<float*>(e.reference_observations()), {e.size(), Env::kObservationSize});
-      })
-      .def_property_readonly("frames", [](py::object self) {
-        Env& e = self.cast<Env&>();
-        return view(self, const_cast<float*>(e.frames()), {e.size(), Env::kFrameSize});
-      })
-      .def_property_readonly("final_frames", [](py::object self) {
-        Env& e = self.cast<Env&>();
-        return view(self, const_cast<float*>(e.final_frames()), {e.size(), Env::kFrameSize});
-      })
       .def("residual_force", &Env::root_residual_force)
       .def("sensor_positions", [](const Env& e, int i) {
         py::array_t<double> out({3, 3});
