@@ -39,11 +39,6 @@ std::shared_ptr<Clips> load_clips(const std::vector<std::string>& paths, const s
   return c;
 }
 
-template <class T>
-py::array view(py::object owner, T* data, std::vector<py::ssize_t> shape) {
-  return py::array_t<T>(shape, data, owner);
-}
-
 // A read-only property `name`: the zero-copy view of get(env), [size] when cols is 0, else
 // [size, cols]; the view keeps the environment alive.
 template <class E, class Get>
@@ -53,7 +48,7 @@ void bind_view(py::class_<E>& c, const char* name, Get get, int cols) {
     using T = std::remove_const_t<std::remove_pointer_t<decltype(get(e))>>;
     std::vector<py::ssize_t> shape{e.size()};
     if (cols) shape.push_back(cols);
-    return view(self, const_cast<T*>(get(e)), shape);
+    return py::array(py::array_t<T>(shape, const_cast<T*>(get(e)), self));
   });
 }
 

@@ -29,14 +29,19 @@ def main(argv=None):
     ap.add_argument("--motions", default=DEFAULT_MOTIONS, help="regex on clip names (the trainer's default)")
     ap.add_argument("--every", type=int, default=1, help="every K-th matching clip")
     a = ap.parse_args(argv)
+    if a.every < 1:
+        raise SystemExit(f"--every {a.every}: expected a whole number >= 1")
     sb = pymod.load(required=True)
     paths = pick_clips(a.train_dir, a.motions, 0)[::max(1, a.every)]
     os.makedirs(a.out_dir, exist_ok=True)
     t0, frames = time.time(), 0
     for i, path in enumerate(paths):
-        run = pymod.run_clip(sb, path, "n3p")
         out = os.path.join(a.out_dir, os.path.basename(path))
-        sb.write_bvh(out, run.pipe, run.out)
+        try:  # a bad clip stops the run with the module's one-line message (it names the file)
+            run = pymod.run_clip(sb, path, "n3p")
+            sb.write_bvh(out, run.pipe, run.out)
+        except (OSError, ValueError) as e:
+            raise SystemExit(str(e) if path in str(e) else f"{path}: {e}") from None
         frames += len(run.inp["time"])
         if (i + 1) % 200 == 0 or i + 1 == len(paths):
             print(f"{i + 1}/{len(paths)} clips, {frames} frames, {time.time() - t0:.0f} s", flush=True)

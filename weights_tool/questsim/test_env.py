@@ -201,3 +201,19 @@ def test_predicted_references_load_as_training_clips(clip_paths, clips30, tmp_pa
     pred = qe.load_clips([str(out / os.path.basename(p)) for p in clip_paths], N3P_LOWER, 30.0)
     for i in range(len(clip_paths)):
         assert abs(pred.frames(i) - clips30.frames(i)) <= 1, (clip_paths[i], pred.frames(i), clips30.frames(i))
+
+
+def test_predicted_references_bad_input(tmp_path):
+    # No matching clip, a bad --every and a malformed BVH each stop with one line naming the problem.
+    from . import predicted_references
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    with pytest.raises(SystemExit, match="no training clips"):
+        predicted_references.main([str(empty), str(tmp_path / "o1")])
+    with pytest.raises(SystemExit, match="--every 0: expected a whole number >= 1"):
+        predicted_references.main([str(empty), str(tmp_path / "o2"), "--every", "0"])
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    (bad / "dataset-1_walk_bad_001.bvh").write_text("HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0\n")
+    with pytest.raises(SystemExit, match="dataset-1_walk_bad_001.bvh"):
+        predicted_references.main([str(bad), str(tmp_path / "o3")])
