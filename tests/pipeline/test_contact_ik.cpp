@@ -52,6 +52,40 @@ TEST_CASE("foot lock: released when the network's toe leaves it or the leg canno
   CHECK(lock.state() == pose::FootLock::State::Blending);
 }
 
+TEST_CASE("foot lock, replant (LoBSTr): a foot released while its contact stays on locks again after the blend") {
+  const Vector3d hip(0, 0.9, 0);
+  for (bool replant : {false, true}) {
+    pose::FootLock lock(10);
+    lock.set_replant(replant);
+    Vector3d target;
+    lock.update(true, Vector3d(0, 0.05, 0), hip, 1.0, 0.1, 0.042, target);
+    lock.update(true, Vector3d(0.2, 0.05, 0), hip, 1.0, 0.1, 0.042, target);  // 20 cm away: drift
+    CHECK(lock.state() == pose::FootLock::State::Blending);
+    for (int k = 2; k < 10; ++k) {  // the blend runs its 10 frames either way
+      REQUIRE(lock.update(true, Vector3d(0.2, 0.05, 0), hip, 1.0, 0.1, 0.042, target));
+      CHECK(lock.state() == pose::FootLock::State::Blending);
+    }
+    REQUIRE(lock.update(true, Vector3d(0.2, 0.05, 0), hip, 1.0, 0.1, 0.042, target));  // the blend's last frame
+    CHECK(lock.state() == pose::FootLock::State::Free);
+    CHECK(target.isApprox(Vector3d(0.2, 0.05, 0)));
+    const bool held = lock.update(true, Vector3d(0.21, 0.05, 0), hip, 1.0, 0.1, 0.042, target);
+    CHECK(held == replant);
+    if (replant) {  // planted where the network has it, at the standing toe height
+      CHECK(lock.state() == pose::FootLock::State::Locked);
+      CHECK(target.isApprox(Vector3d(0.21, 0.042, 0)));
+      lock.reset();  // reset keeps the option
+      lock.update(true, Vector3d(0, 0.05, 0), hip, 1.0, 0.1, 0.042, target);
+      lock.update(true, Vector3d(0, 0.05, 0), Vector3d(1.5, 0.9, 0), 1.0, 0.1, 0.042, target);  // hip gone: reach
+      for (int k = 0; k < 10; ++k) lock.update(true, Vector3d(0, 0.05, 0), Vector3d(1.5, 0.9, 0), 1.0, 0.1, 0.042, target);
+      CHECK(lock.state() == pose::FootLock::State::Free);  // a joint out of reach is not replanted
+      lock.update(true, Vector3d(1.4, 0.05, 0), Vector3d(1.5, 0.9, 0), 1.0, 0.1, 0.042, target);
+      CHECK(lock.state() == pose::FootLock::State::Locked);  // the network's foot in reach again
+    } else {
+      CHECK(lock.state() == pose::FootLock::State::Free);
+    }
+  }
+}
+
 TEST_CASE("two-bone IK keeps bone lengths, reaches reachable targets, bends towards the pole") {
   const Vector3d a(0, 1, 0), b(0, 0.55, 0.02), c(0, 0.1, 0);
   const double l1 = (b - a).norm(), l2 = (c - b).norm();

@@ -11,7 +11,9 @@
 // predicted joint has left by more than `max_drift` (the network says the foot is elsewhere: a
 // missed contact release), is released through the same blend and held off: it does not lock again
 // until the contact flag has gone off once. Rearm says whether the release frame's own "off"
-// counts (SameFrame, LoBSTr) or only a later one does (NextFrame, Neural3Points).
+// counts (SameFrame, LoBSTr) or only a later one does (NextFrame, Neural3Points). With replant
+// (LoBSTr), a foot whose contact stays on through the release locks again where the network puts
+// it once the blend is over: a re-planted foot instead of one that follows a drifting network.
 // hold(true) (the user stands still, trackers/stillness.hpp): a locked foot stays locked whatever
 // the contact flag or the drift says, so the avatar's feet do not creep while the user stands; a
 // lock the hip has left out of reach slides back into reach on the floor (at most 20 cm per frame,
@@ -122,6 +124,10 @@ class FootLock {
   // Under hold, how far (m per frame, the joint's units) the network's joint may move for a held-off
   // free foot to lock; the pipelines set speed / frame rate. Kept by reset().
   void set_hold_rearm_step(double metres) noexcept { rearm_step_ = metres; }
+  // Replant (LoBSTr): a foot released while its contact stays on locks again where the network
+  // has it once the release blend is over, instead of following the network until the contact
+  // goes off once (kept by reset()).
+  void set_replant(bool on) noexcept { replant_ = on; }
 
   // One frame: contact state, the predicted joint (toe) position, the hip position and the leg's
   // reach; a new lock is put at `lock_height`. Returns true when IK must place the joint at `target`.
@@ -161,6 +167,7 @@ class FootLock {
     if (hold_ && contact && state_ != State::Locked && shown && (joint - prev_joint).norm() <= rearm_step_ &&
         (joint - hip).norm() <= max_reach)
       hold_off_ = false;
+    if (replant_ && contact && state_ == State::Free && (joint - hip).norm() <= max_reach) hold_off_ = false;
     if (hold_off_) contact = false;
     switch (state_) {
       case State::Free:
@@ -246,6 +253,7 @@ class FootLock {
   State state_ = State::Free;
   int k_ = 0, settle_ = n_;  // settle_ < n_: a hold lock still easing down to its height
   double rearm_step_ = 0.004;  // 0.12 m/s at 30 Hz
+  bool replant_ = false;
   bool hold_off_ = false, hold_ = false, shown_ = false;  // shown_: current_ and last_joint_ are last frame's
   bool foot_shown_ = false;  // shown_foot_ holds a show()n rotation
   Eigen::Vector3d lock_ = Eigen::Vector3d::Zero(), from_ = Eigen::Vector3d::Zero(), current_ = Eigen::Vector3d::Zero();
