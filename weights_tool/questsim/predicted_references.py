@@ -32,7 +32,7 @@ def main(argv=None):
     if a.every < 1:
         raise SystemExit(f"--every {a.every}: expected a whole number >= 1")
     sb = pymod.load(required=True)
-    paths = pick_clips(a.train_dir, a.motions, 0)[::max(1, a.every)]
+    paths = pick_clips(a.train_dir, a.motions, 0)[::a.every]
     os.makedirs(a.out_dir, exist_ok=True)
     t0, frames = time.time(), 0
     for i, path in enumerate(paths):

@@ -59,9 +59,9 @@ struct LoBSTrConfig {
   double contact_threshold = 0.5;  // P(contact) above which a foot is in contact
   double lock_max_drift = 0.10;    // m: release a lock the network's toe has left this far (standard scale)
   bool contact_ik = true;          // §3.4.1 post-processing
-  // A locked toe whose ankle the leg cannot reach rolls the foot over the toe by the least angle
-  // that reaches, at most this (rad; pose/foot_roll.hpp; 0: off), as a heel lifts at the end of a
-  // stance, instead of the leg stretching and the toe sliding. All 301 validation clips (offdist
+  // A locked (or releasing) toe whose ankle the leg cannot reach rolls the foot over the toe by the
+  // least angle that reaches, at most this (rad; pose/foot_roll.hpp; 0: off), as a heel lifts at the
+  // end of a stance, instead of the leg stretching and the toe sliding. All 301 validation clips (offdist
   // nominal): MPJPE 3.15 -> 3.12 cm, foot skating 6.59 -> 6.53 cm/s.
   double max_foot_roll = 1.0;
   // A lock released for drift or reach while the network's contact stays on re-plants the foot
@@ -384,7 +384,8 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       const int* L = meta_.lower + 4 * foot;  // upper leg, lower leg, foot, toes
       const int ul = L[0], ll = L[1], ft = L[2], toe = L[3];
       const Eigen::Vector3d hip = out_.world().position[ul];
-      const double reach = 1.02 * (s.offsets[ll].norm() + s.offsets[ft].norm()) + s.offsets[toe].norm();
+      const double leg = s.offsets[ll].norm() + s.offsets[ft].norm();  // hip to ankle, straight
+      const double reach = 1.02 * leg + s.offsets[toe].norm();
       Eigen::Vector3d target;
       const bool still = cfg_.hold_feet_when_still && still_.still();
       lock_[foot].hold(still);
@@ -398,7 +399,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       Eigen::Quaterniond& foot_w = out_.world().rotation[ft];
       lock_[foot].orient(foot_w, still);
       if (cfg_.max_foot_roll > 0)
-        foot_w = pose::roll_foot_into_reach(foot_w, target, s.offsets[toe], hip, s.offsets[ll].norm() + s.offsets[ft].norm(), cfg_.max_foot_roll);
+        foot_w = pose::roll_foot_into_reach(foot_w, target, s.offsets[toe], hip, leg, cfg_.max_foot_roll);
       // ankle target keeps the foot's world orientation: ankle = target - (toe - ankle)
       const Eigen::Vector3d ankle_t = target - foot_w * s.offsets[toe];
       const pose::WorldPose& w = out_.world();
