@@ -96,8 +96,16 @@ def pretrain_step(sub, A, T):
     return nmse(sub, y, torch.cat([F["gup"][:, 1:], F["onext"][:, 1:]], -1)) + W_FK * lf, dict(fk=lf.item())
 
 
-def finetune_step(nets, A, T, hmd_frac=0.25):
-    """One autoregressive rollout of T frames from ground-truth states; L = L_sig + L_lo + L_up."""
+def acc_loss(sub, y, target, sl):
+    """Smoothness: MSE of the normalised outputs' second differences against the targets' (matching the
+    motion's own accelerations, so it damps frame-to-frame noise without pulling towards stillness)."""
+    d2 = lambda x: x[:, 2:] - 2 * x[:, 1:-1] + x[:, :-2]
+    return (((d2(y) - d2(target)) / sub.out_std[sl]) ** 2).mean()
+
+
+def finetune_step(nets, A, T, hmd_frac=0.25, w_acc=0.0):
+    """One autoregressive rollout of T frames from ground-truth states; L = L_sig + L_lo + L_up
+    (+ w_acc times the smoothness terms of G_lo's and G_up's joint states when w_acc > 0)."""
     sig, lo, up = nets
     F0 = targets(A[:, :] if False else {k: v[:, 0:3] for k, v in A.items()}, A["H"][:, 0:3])
     h0, glo0, gup0 = A["H"][:, 1], F0["glo"][:, 0], F0["gup"][:, 0]
@@ -121,7 +129,13 @@ def finetune_step(nets, A, T, hmd_frac=0.25):
     l_up = nmse(up, out["gup"], Fp["gup"], slice(0, L.N_GUP)) + nmse(up, out["ostar"], Fp["onext"], slice(L.N_GUP, None)) \
         + W_FK * fk_loss(out["gup"], L.J_UP)
     del G
-    return l_sig + l_lo + l_up, dict(h=lh.item(), sig=l_sig.item(), lo=l_lo.item(), up=l_up.item())
+    parts = dict(h=lh.item(), sig=l_sig.item(), lo=l_lo.item(), up=l_up.item())
+    total = l_sig + l_lo + l_up
+    if w_acc > 0:
+        la = acc_loss(lo, out["glo"], glo_t, slice(0, L.N_GLO)) + acc_loss(up, out["gup"], Fp["gup"], slice(0, L.N_GUP))
+        parts["acc"] = la.item()
+        total = total + w_acc * la
+    return total, parts
 
 
 def save(path, nets, info):
@@ -163,6 +177,11 @@ def main(argv=None):
                    "fine-tuning runs (its --minutes budget)")
     p.add_argument("--init", default=None, help="exported weights prefix (e.g. examples/weights/n3p) to start "
                    "every stage from, keeping its normalization: fine-tuning on new data")
+    p.add_argument("--finetune-up", action="store_true", help="fine-tune G_up too (the paper freezes it): "
+                   "lets the upper body adapt to device-realistic input")
+    p.add_argument("--w-acc", type=float, default=0.0, help="weight of the smoothness term in fine-tuning "
+                   "(second differences of the joint states against the targets'); 0 = the paper's loss")
+    p.add_argument("--val-every", type=int, default=200)
     a = p.parse_args(argv)
     torch.set_num_threads(a.threads)
     torch.manual_seed(a.seed)
@@ -203,38 +222,46 @@ def main(argv=None):
         info["stages"][sub.name] = {"iterations": it, "val_loss": vl}
         print(f"[{sub.name}] done: {it} it, val loss {vl:.4f}", flush=True)
         save(a.out + f".{sub.name}", nets, info)
-    # joint fine-tuning of G_sig + G_lo, G_up frozen
+    # joint fine-tuning of G_sig + G_lo, G_up frozen (or trained too: --finetune-up)
     sig, lo, up = nets
+    trained = [sig, lo] + ([up] if a.finetune_up else [])
     for prm in up.parameters():
-        prm.requires_grad_(False)
+        prm.requires_grad_(a.finetune_up)
     up.eval()
-    opt = torch.optim.Adam(list(sig.parameters()) + list(lo.parameters()), lr=a.lr)
+    params = [prm for s in trained for prm in s.parameters()]
+    opt = torch.optim.Adam(params, lr=a.lr)
     t0, it, best = time.time(), 0, float("inf")
-    ft = lambda r: finetune_step(nets, batch(va, r, 64, T + 3), T)[0]
-    sig.eval(), lo.eval()
+    ft = lambda r: finetune_step(nets, batch(va, r, 64, T + 3), T, w_acc=a.w_acc)[0]
+    info["finetune"] = {"up": a.finetune_up, "w_acc": a.w_acc}
+    for s in trained:
+        s.eval()
     best = val_loss(ft, va)
     print(f"[finetune] start val loss {best:.4f}", flush=True)
     save(a.out, nets, info)
     while time.time() - t0 < a.minutes[3] * 60 and it < a.max_iters:
-        sig.train(), lo.train()
-        loss, parts = finetune_step(nets, batch(tr, rng, a.batch, T + 3), T)
+        for s in trained:
+            s.train()
+        loss, parts = finetune_step(nets, batch(tr, rng, a.batch, T + 3), T, w_acc=a.w_acc)
         opt.zero_grad()
         loss.backward()
-        torch.nn.utils.clip_grad_norm_(list(sig.parameters()) + list(lo.parameters()), 1.0)
+        torch.nn.utils.clip_grad_norm_(params, 1.0)
         opt.step()
         it += 1
         if it % 25 == 0:
             print(f"[finetune] it {it} {time.time() - t0:.0f}s loss {loss.item():.4f} {parts}", flush=True)
-        if it % 200 == 0:
-            sig.eval(), lo.eval()
+        if it % a.val_every == 0:
+            for s in trained:
+                s.eval()
             vl = val_loss(ft, va)
             tag = ""
             if vl < best:
                 best, tag = vl, " (best, saved)"
                 info["stages"]["finetune"] = {"iterations": it, "val_loss": vl}
                 save(a.out, nets, info)
+            save(a.out + f".it{it}", nets, info)  # every snapshot: the pipeline, not this loss, picks
             print(f"[finetune] VAL it {it} {vl:.4f}{tag}", flush=True)
-    sig.eval(), lo.eval()
+    for s in trained:
+        s.eval()
     vl = val_loss(ft, va)
     if vl < best:
         info["stages"]["finetune"] = {"iterations": it, "val_loss": vl}

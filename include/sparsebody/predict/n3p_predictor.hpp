@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -58,9 +59,12 @@ class N3PPredictor {
   };
 
   // `prefix` + "_signal.json", "_lower.json", "_upper.json"; a path to one of the three files works
-  // too. Throws LoadError.
+  // too, and so does a folder holding n3p_signal.json, n3p_lower.json and n3p_upper.json (what the
+  // demo's --weights DIR and the weights tool's export write). Throws LoadError.
   static Weights load(const std::string& prefix_or_file) {
     std::string p = prefix_or_file;
+    std::error_code ec;
+    if (!p.empty() && std::filesystem::is_directory(p, ec)) p += (p.back() == '/' ? "n3p" : "/n3p");
     for (const char* suffix : {"_signal.json", "_lower.json", "_upper.json"}) {
       const std::string s(suffix);
       if (p.size() > s.size() && p.compare(p.size() - s.size(), s.size(), s) == 0) {
