@@ -96,16 +96,26 @@ def pretrain_step(sub, A, T):
     return nmse(sub, y, torch.cat([F["gup"][:, 1:], F["onext"][:, 1:]], -1)) + W_FK * lf, dict(fk=lf.item())
 
 
-def acc_loss(sub, y, target, sl):
+def pose_columns(n_joints):
+    """Positions and 6D rotations of a joint-state layout [p (3J) | v (3J) | q6 (6J) | ...]: what the
+    smoothness term acts on (velocities, contacts and z are left to their own losses: a second
+    difference of a contact step or of a velocity at a foot strike is a spike the target has)."""
+    return torch.tensor(list(range(3 * n_joints)) + list(range(6 * n_joints, 12 * n_joints)))
+
+
+IDX_LO, IDX_UP = pose_columns(len(L.J_LO)), pose_columns(len(L.J_UP))
+
+
+def acc_loss(sub, y, target, idx):
     """Smoothness: MSE of the normalised outputs' second differences against the targets' (matching the
     motion's own accelerations, so it damps frame-to-frame noise without pulling towards stillness)."""
-    d2 = lambda x: x[:, 2:] - 2 * x[:, 1:-1] + x[:, :-2]
-    return (((d2(y) - d2(target)) / sub.out_std[sl]) ** 2).mean()
+    d2 = lambda x: x[:, 2:, idx] - 2 * x[:, 1:-1, idx] + x[:, :-2, idx]
+    return (((d2(y) - d2(target)) / sub.out_std[idx]) ** 2).mean()
 
 
 def finetune_step(nets, A, T, hmd_frac=0.25, w_acc=0.0):
     """One autoregressive rollout of T frames from ground-truth states; L = L_sig + L_lo + L_up
-    (+ w_acc times the smoothness terms of G_lo's and G_up's joint states when w_acc > 0)."""
+    (+ w_acc times the smoothness terms of G_lo's and G_up's joint positions and rotations when w_acc > 0)."""
     sig, lo, up = nets
     F0 = targets(A[:, :] if False else {k: v[:, 0:3] for k, v in A.items()}, A["H"][:, 0:3])
     h0, glo0, gup0 = A["H"][:, 1], F0["glo"][:, 0], F0["gup"][:, 0]
@@ -132,7 +142,7 @@ def finetune_step(nets, A, T, hmd_frac=0.25, w_acc=0.0):
     parts = dict(h=lh.item(), sig=l_sig.item(), lo=l_lo.item(), up=l_up.item())
     total = l_sig + l_lo + l_up
     if w_acc > 0:
-        la = acc_loss(lo, out["glo"], glo_t, slice(0, L.N_GLO)) + acc_loss(up, out["gup"], Fp["gup"], slice(0, L.N_GUP))
+        la = acc_loss(lo, out["glo"], glo_t, IDX_LO) + acc_loss(up, out["gup"], Fp["gup"], IDX_UP)
         parts["acc"] = la.item()
         total = total + w_acc * la
     return total, parts
@@ -180,7 +190,7 @@ def main(argv=None):
     p.add_argument("--finetune-up", action="store_true", help="fine-tune G_up too (the paper freezes it): "
                    "lets the upper body adapt to device-realistic input")
     p.add_argument("--w-acc", type=float, default=0.0, help="weight of the smoothness term in fine-tuning "
-                   "(second differences of the joint states against the targets'); 0 = the paper's loss")
+                   "(second differences of the joint positions and rotations against the targets'); 0 = the paper's loss")
     p.add_argument("--val-every", type=int, default=200)
     a = p.parse_args(argv)
     torch.set_num_threads(a.threads)
