@@ -20,7 +20,7 @@ import torch
 
 from . import layout as L
 from .dataset import KEYS, Data
-from .model import Sub, rollout, targets
+from .model import Sub, rollout, targets, world_pose
 
 W_H, W_FK = 10.0, 100.0
 NOISE = 0.05  # teacher-forcing noise on the fed-back state, in units of its std
@@ -113,7 +113,20 @@ def acc_loss(sub, y, target, idx):
     return (((d2(y) - d2(target)) / sub.out_std[idx]) ** 2).mean()
 
 
-def finetune_step(nets, A, T, hmd_frac=0.25, w_acc=0.0):
+TOES = [L.NAMES.index("Toes_L"), L.NAMES.index("Toes_R")]
+
+
+def skate_loss(h, glo, gup, contact):
+    """Foot skating: mean squared horizontal world speed (m/s) of each toe between consecutive frames on
+    which the ground truth has that foot in contact (contact [B, T, 2]): the rollout's world pose, as the
+    pipeline shows it (FK of the predicted rotations from the predicted hips and heading)."""
+    P, _ = world_pose(h, glo, gup)
+    v = (P[:, 1:, TOES][..., [0, 2]] - P[:, :-1, TOES][..., [0, 2]]) * L.FPS
+    m = (contact[:, 1:] > 0.5) & (contact[:, :-1] > 0.5)
+    return ((v ** 2).sum(-1) * m).sum() / m.sum().clamp(min=1)
+
+
+def finetune_step(nets, A, T, hmd_frac=0.25, w_acc=0.0, w_skate=0.0):
     """One autoregressive rollout of T frames from ground-truth states; L = L_sig + L_lo + L_up
     (+ w_acc times the smoothness terms of G_lo's and G_up's joint positions and rotations when w_acc > 0)."""
     sig, lo, up = nets
@@ -145,6 +158,10 @@ def finetune_step(nets, A, T, hmd_frac=0.25, w_acc=0.0):
         la = acc_loss(lo, out["glo"], glo_t, IDX_LO) + acc_loss(up, out["gup"], Fp["gup"], IDX_UP)
         parts["acc"] = la.item()
         total = total + w_acc * la
+    if w_skate > 0:
+        ls = skate_loss(h, out["glo"], out["gup"], A["CT"][:, 2:T + 2])
+        parts["skate"] = ls.item()
+        total = total + w_skate * ls
     return total, parts
 
 
@@ -191,6 +208,8 @@ def main(argv=None):
                    "lets the upper body adapt to device-realistic input")
     p.add_argument("--w-acc", type=float, default=0.0, help="weight of the smoothness term in fine-tuning "
                    "(second differences of the joint positions and rotations against the targets'); 0 = the paper's loss")
+    p.add_argument("--w-skate", type=float, default=0.0, help="weight of the foot-skating term in fine-tuning "
+                   "(squared world toe speed, m/s, while the ground truth's foot is in contact)")
     p.add_argument("--val-every", type=int, default=200)
     a = p.parse_args(argv)
     torch.set_num_threads(a.threads)
@@ -241,8 +260,8 @@ def main(argv=None):
     params = [prm for s in trained for prm in s.parameters()]
     opt = torch.optim.Adam(params, lr=a.lr)
     t0, it, best = time.time(), 0, float("inf")
-    ft = lambda r: finetune_step(nets, batch(va, r, 64, T + 3), T, w_acc=a.w_acc)[0]
-    info["finetune"] = {"up": a.finetune_up, "w_acc": a.w_acc}
+    ft = lambda r: finetune_step(nets, batch(va, r, 64, T + 3), T, w_acc=a.w_acc, w_skate=a.w_skate)[0]
+    info["finetune"] = {"up": a.finetune_up, "w_acc": a.w_acc, "w_skate": a.w_skate}
     for s in trained:
         s.eval()
     best = val_loss(ft, va)
@@ -251,7 +270,7 @@ def main(argv=None):
     while time.time() - t0 < a.minutes[3] * 60 and it < a.max_iters:
         for s in trained:
             s.train()
-        loss, parts = finetune_step(nets, batch(tr, rng, a.batch, T + 3), T, w_acc=a.w_acc)
+        loss, parts = finetune_step(nets, batch(tr, rng, a.batch, T + 3), T, w_acc=a.w_acc, w_skate=a.w_skate)
         opt.zero_grad()
         loss.backward()
         torch.nn.utils.clip_grad_norm_(params, 1.0)
