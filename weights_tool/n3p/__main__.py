@@ -1,4 +1,4 @@
-"""Command line: /usr/bin/python3 -m weights_tool.n3p {dataset,train,export,evaluate,golden} ...
+"""Command line: /usr/bin/python3 -m weights_tool.n3p {dataset,train,average,export,evaluate,golden} ...
 
 Reproduce the default weights (examples/weights/n3p_*.json), from the repository root:
   mkdir -p /tmp/n3p/data && tar -xJf ../shared/data/bandai-namco/train.tar.xz -C /tmp/n3p/data
@@ -67,6 +67,12 @@ def main(argv=None):
         if a.json:
             with open(a.json, "w") as f:
                 json.dump(r, f, indent=1)
+    elif cmd == "average":
+        from . import train
+        p.add_argument("out", help="checkpoint (.pt) to write")
+        p.add_argument("checkpoints", nargs="+", help="checkpoints of one run (e.g. OUT.it600 OUT.it900 ...)")
+        a = p.parse_args(rest)
+        print(train.average(a.checkpoints, a.out))
     elif cmd == "golden":
         from . import golden
         p.add_argument("out_dir")

@@ -179,6 +179,21 @@ def load(path):
     return nets, ck["info"]
 
 
+def average(checkpoints, out):
+    """Weight averaging of one run's snapshots (Izmailov et al. 2018, SWA): the mean of every float tensor.
+    Snapshots of one fine-tuning run stay in one basin, and their mean smooths the SGD noise that makes
+    any single snapshot's pipeline figures jump (README: the shipped weights)."""
+    cks = [torch.load(c, map_location="cpu") for c in checkpoints]
+    avg = cks[-1]
+    for name, sd in avg["nets"].items():
+        for k, v in sd.items():
+            if v.is_floating_point():
+                sd[k] = sum(c["nets"][name][k] for c in cks) / len(cks)
+    avg["info"]["averaged"] = list(checkpoints)
+    torch.save(avg, out)
+    return f"wrote {out}: the mean of {len(cks)} checkpoints"
+
+
 def val_loss(fn, data, seed=123, n=4):
     rng = np.random.default_rng(seed)
     torch.manual_seed(seed)
