@@ -252,9 +252,9 @@ TEST_CASE("n3p default weights: an application's proportions give the arms only 
 
 TEST_CASE("n3p default weights: a folder loads the n3p_*.json set inside it (the demo's --weights DIR)") {
   const std::string dir = std::string(SPARSEBODY_SOURCE_DIR) + "/examples/weights";
+  const auto ref = Paper::load(prefix());
   for (const std::string& path : {dir, dir + "/"}) {
     const auto w = Paper::load(path);
-    const auto ref = Paper::load(prefix());
     CHECK(w.lo->info().kind == "n3p_lower");
     CHECK(w.up->info().kind == "n3p_upper");
     CHECK(w.sig->info().meta.dump() == ref.sig->info().meta.dump());

@@ -128,7 +128,8 @@ def skate_loss(h, glo, gup, contact):
 
 def finetune_step(nets, A, T, hmd_frac=0.25, w_acc=0.0, w_skate=0.0):
     """One autoregressive rollout of T frames from ground-truth states; L = L_sig + L_lo + L_up
-    (+ w_acc times the smoothness terms of G_lo's and G_up's joint positions and rotations when w_acc > 0)."""
+    (+ w_acc times the smoothness terms of G_lo's and G_up's joint positions and rotations, + w_skate times
+    the foot-skating term, each when its weight is > 0)."""
     sig, lo, up = nets
     F0 = targets(A[:, :] if False else {k: v[:, 0:3] for k, v in A.items()}, A["H"][:, 0:3])
     h0, glo0, gup0 = A["H"][:, 1], F0["glo"][:, 0], F0["gup"][:, 0]

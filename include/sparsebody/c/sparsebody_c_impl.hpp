@@ -21,7 +21,6 @@
 #include <exception>
 #include <memory>
 #include <new>
-#include <filesystem>
 #include <limits>
 #include <string>
 #include <system_error>
@@ -327,11 +326,6 @@ inline sb_status check_frame(char* msg, const char* fn, const sb_tracker_frame* 
   return SB_OK;
 }
 
-inline bool is_dir(const char* path) noexcept {
-  std::error_code ec;
-  return std::filesystem::is_directory(path, ec);
-}
-
 // Loads and checks N3P weights by building one pipeline (its constructor validates the skeleton).
 // The weights of storage W in a handle.
 template <class W, class H>
@@ -469,15 +463,7 @@ SPARSEBODY_API sb_status sb_weights_load_storage(int32_t model, const char* path
     } else if (model == SB_MODEL_QUESTSIM) {
       w->questsim = c::QuestSim::load(path);  // kind "questsim_policy", the default avatar's sizes
     } else {
-      std::string p = path;
-      if (c::is_dir(path)) p += "/n3p";
-      for (const char* suffix : {"_signal.json", "_lower.json", "_upper.json"}) {
-        const std::size_t n = std::strlen(suffix);
-        if (p.size() > n && p.compare(p.size() - n, n, suffix) == 0) {
-          p.resize(p.size() - n);
-          break;
-        }
-      }
+      const std::string p = sparsebody::predict::n3p_weights_prefix(path);
       c::with_storage(storage, [&](auto tag) {
         c::load_n3p<typename decltype(tag)::type>(*w, p + "_signal.json", p + "_lower.json", p + "_upper.json");
       });

@@ -42,6 +42,22 @@ namespace sparsebody::predict {
 
 namespace n3p = features::n3p;
 
+// The prefix of a Neural3Points weights set from what a user names: the prefix itself (`dir/n3p`),
+// one of its three files (`dir/n3p_lower.json`), or a folder holding n3p_{signal,lower,upper}.json.
+// The set's files are prefix + "_signal.json", "_lower.json", "_upper.json". (The C API uses it too.)
+inline std::string n3p_weights_prefix(std::string p) {
+  std::error_code ec;
+  if (!p.empty() && std::filesystem::is_directory(p, ec)) p += (p.back() == '/' ? "n3p" : "/n3p");
+  for (const char* suffix : {"_signal.json", "_lower.json", "_upper.json"}) {
+    const std::string s(suffix);
+    if (p.size() > s.size() && p.compare(p.size() - s.size(), s.size(), s) == 0) {
+      p.resize(p.size() - s.size());
+      break;
+    }
+  }
+  return p;
+}
+
 // HSig, HLo, HUp: hidden sizes of G_sig, G_lo, G_up (paper: 64, 128, 128). W: stored weight type
 // (T, or nn::f16 to halve the weight bytes read per frame).
 template <typename T = float, int HSig = 64, int HLo = 128, int HUp = 128, typename W = T>
@@ -62,16 +78,7 @@ class N3PPredictor {
   // too, and so does a folder holding n3p_signal.json, n3p_lower.json and n3p_upper.json (what the
   // demo's --weights DIR and the weights tool's export write). Throws LoadError.
   static Weights load(const std::string& prefix_or_file) {
-    std::string p = prefix_or_file;
-    std::error_code ec;
-    if (!p.empty() && std::filesystem::is_directory(p, ec)) p += (p.back() == '/' ? "n3p" : "/n3p");
-    for (const char* suffix : {"_signal.json", "_lower.json", "_upper.json"}) {
-      const std::string s(suffix);
-      if (p.size() > s.size() && p.compare(p.size() - s.size(), s.size(), s) == 0) {
-        p.resize(p.size() - s.size());
-        break;
-      }
-    }
+    const std::string p = n3p_weights_prefix(prefix_or_file);
     Weights w;
     w.sig = nn::NetworkWeights<SigNet>::load(p + "_signal.json", networks::kN3PSignalKind);
     w.lo = nn::NetworkWeights<LoNet>::load(p + "_lower.json", networks::kN3PLowerKind);
