@@ -570,13 +570,24 @@ TEST_CASE("foot roll: a toe-pinned foot turns about its toe by the least angle t
       ++in_reach;
       continue;
     }
-    if (angle == 0.0) {  // unchanged although out of reach: no roll within max_roll reaches
+    if ((hip - ankle).norm() > 0.999 * reach + 1e-9) {
+      // still out of reach: no roll within max_roll and the elevation bounds reaches, and the one
+      // taken brings the ankle nearest the hip (unchanged when none brings it nearer)
+      const Vector3d lat = (foot * t).cross(Vector3d::UnitY()).normalized();
       for (double a = -max_roll; a <= max_roll; a += 0.01) {  // within the elevation bounds
-        const Vector3d lat = (foot * t).cross(Vector3d::UnitY()).normalized();
         const Vector3d ankle_a = toe - Eigen::AngleAxisd(a, lat) * (foot * t);
         const double elevation = elevation_of(ankle_a);
-        if (elevation < 0 || elevation > 80 * M_PI / 180) continue;
+        if (elevation < -1e-9 || elevation > 80 * M_PI / 180 + 1e-9) continue;
         CHECK((hip - ankle_a).norm() > 0.999 * reach - 1e-9);
+        CHECK((hip - ankle_a).norm() >= (hip - ankle).norm() - 1e-9);
+      }
+      CHECK((hip - ankle).norm() <= (hip - ankle0).norm() + 1e-12);
+      CHECK(angle <= max_roll + 1e-12);
+      const double elevation = elevation_of(ankle);
+      if (angle > 0) {
+        CHECK((r * t).cross(Vector3d::UnitY()).normalized().isApprox(lat, 1e-9));  // about the lateral axis
+        CHECK(elevation >= -1e-9);
+        CHECK(elevation <= 80 * M_PI / 180 + 1e-9);
       }
       ++unreachable;
       continue;
@@ -612,4 +623,31 @@ TEST_CASE("foot roll: a toe-pinned foot turns about its toe by the least angle t
   // degenerate input: NaN hip or a zero-length foot leaves the foot as it is
   CHECK(pose::roll_foot_into_reach(heel_up, toe, t, Vector3d::Constant(NAN), reach, 1.0).coeffs() == heel_up.coeffs());
   CHECK(pose::roll_foot_into_reach(heel_up, toe, Vector3d::Zero(), toe + Vector3d(0, 1, 0), reach, 1.0).coeffs() == heel_up.coeffs());
+}
+
+TEST_CASE("foot roll: lower_heel brings a raised heel down towards the standing elevation, at most max_turn a call") {
+  const Vector3d t(0, -0.06, 0.12);  // toe 12 cm forward and 6 cm down in the foot frame
+  auto elevation = [&](const Eigen::Quaterniond& f) {
+    const Vector3d e = -(f * t);
+    return std::asin(e.y() / e.norm());
+  };
+  const double standing = elevation(Eigen::Quaterniond::Identity());  // ~26.6 deg
+  const Eigen::Quaterniond yaw(Eigen::AngleAxisd(0.7, Vector3d::UnitY()));
+  const Eigen::Quaterniond heel_up = yaw * Eigen::Quaterniond(Eigen::AngleAxisd(0.6, Vector3d::UnitX()));  // 0.6 rad up
+  REQUIRE(elevation(heel_up) == doctest::Approx(standing + 0.6));
+  const Eigen::Quaterniond step = pose::lower_heel(heel_up, t, standing, 0.1);
+  CHECK(elevation(step) == doctest::Approx(standing + 0.5));
+  // about the lateral axis: the heading is kept
+  const Vector3d lat0 = (heel_up * t).cross(Vector3d::UnitY()).normalized(), lat = (step * t).cross(Vector3d::UnitY()).normalized();
+  CHECK((lat - lat0).norm() < 1e-9);
+  // down to the standing elevation and no further
+  Eigen::Quaterniond f = heel_up;
+  for (int i = 0; i < 20; ++i) f = pose::lower_heel(f, t, standing, 0.1);
+  CHECK(elevation(f) == doctest::Approx(standing).epsilon(1e-9));
+  CHECK(f.angularDistance(yaw) < 1e-9);
+  // a foot at or below the standing elevation, or a degenerate one, is left as it is
+  const Eigen::Quaterniond toe_up = yaw * Eigen::Quaterniond(Eigen::AngleAxisd(-0.2, Vector3d::UnitX()));
+  CHECK(pose::lower_heel(toe_up, t, standing, 0.1).coeffs() == toe_up.coeffs());
+  CHECK(pose::lower_heel(heel_up, Vector3d::Zero(), standing, 0.1).coeffs() == heel_up.coeffs());
+  CHECK(pose::lower_heel(heel_up, t, standing, 0.0).coeffs() == heel_up.coeffs());
 }

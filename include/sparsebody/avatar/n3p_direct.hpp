@@ -89,6 +89,11 @@ struct N3PConfig {
   // (rad, ~57 deg) before the pin slides or is released. Not while moving: there a pin out of
   // reach is a step or a jump (head_height's release) and is let go.
   double max_foot_roll = 1.0;
+  // ... and a held foot whose heel is up (a stop caught the rear foot at its push-off: toe pinned,
+  // ankle 74-80 deg above it where a standing foot's is ~44, g_lo^0's) comes down towards the
+  // standing elevation at this rate (rad/s), the roll above raising it as far as the leg needs.
+  // Without it the avatar stood on the ball of its rear foot for the whole stand.
+  double heel_settle_speed = 1.0;
   // Toe pins: while the headset rises or falls faster than this (m/s, standard scale, over 2 frames:
   // a jump's take-off, not a run's bob; 0.6 m/s fired at the csv sessions' dead stops and their
   // feet while still went 0.79 -> 1.26 cm/s) and for airborne_seconds after, feet are not held as
@@ -146,6 +151,14 @@ struct N3PConfig {
   // on validation device sessions (feet while still 0.42 -> 0.46 cm/s); 1.2 never does.
   double head_height_jump_speed = 1.2;
   double head_height_max_step = 0.15; // m per step (4.5 m/s at 30 Hz); more catches up over frames
+  // While the user stands still, held feet pinned more than `platform_height` above the standing
+  // foot's height (m, standard scale: on a step, a ramp, a platform) rise with the head by at most
+  // `platform_rise_step` a frame when their legs keep it below the headset. A walk up a ramp ends
+  // with feet pinned where the last steps were made, lower than the platform, and the lift stopped
+  // at their reach (the head 10 cm below the headset). Feet on the floor (the floor at y = 0)
+  // never rise: there a head above the predicted one is the pose's, not a step's.
+  double platform_height = 0.05;
+  double platform_rise_step = 0.01;  // m per frame (0.3 m/s at 30 Hz)
   trackers::SanitizerConfig sanitizer{};
   features::DeviceModel devices{};                // device -> joint offsets (DeviceModel::none(): trackers at the joints)
   features::AutoCalibrationConfig calibration{};  // the standing-window search (enabled by default)
@@ -184,6 +197,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       throw LoadError("n3p pipeline", "skeleton lacks a toe joint (N3PConfig::pin = Toe)");
     for (int side = 0; side < 2; ++side)
       reach_[side] = s.offsets[leg_[side][1]].norm() + s.offsets[leg_[side][2]].norm();
+    standing_feet();
     head_ = f("Head");
     spine_ = pose::ChainReach(pred_.skeleton(), head_, 3);
     body_ = s;  // the user's proportions are written into this copy (no allocation later)
@@ -472,7 +486,8 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     if (want > 0.0 && !(head_vy_ > cfg_.head_height_jump_speed)) {
       // up: as far as the pinned legs reach; a head higher by `release` lifts them (a jump's
       // take-off lifts them at once)
-      const double m = pinned_lift();
+      double m = pinned_lift();
+      if (want > m) m += raise_platform_pins(want - m);  // a pin raised by dy lets the body rise dy more
       want = std::min(want, m) + std::max(0.0, want - m - cfg_.head_height_release);
     }
     // the lift changes by at most max_step a frame (the pose under it is the network's each frame)
@@ -540,6 +555,19 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       }
       if (lock_[side].update(c, w.position[toe_pin ? toe_[side] : l[2]], lock_hip, reach_[side], cfg_.foot_max_drift, target)) {
         lock_[side].orient(foot_w, still);  // planted while still, eased over 8 frames
+        if (toe_pin && still && cfg_.heel_settle_speed > 0 && lock_[side].state() == pose::FootLock::State::Locked) {
+          // a heel left up comes down as far as the leg reaches (the shown foot turns with the
+          // planted one)
+          const Eigen::Quaterniond& q = lock_[side].planted();
+          const Eigen::Quaterniond low = pose::roll_foot_into_reach(
+              pose::lower_heel(q, t, stand_elevation_[side], cfg_.heel_settle_speed / pred_.meta().frame_rate), target, t, hip,
+              reach_[side], cfg_.max_foot_roll);
+          if ((target - low * t - hip).norm() < reach_[side] && (low * t).y() > (q * t).y()) {  // in reach and lower
+            const Eigen::Quaterniond dq = low * q.conjugate();
+            lock_[side].turn_planted(dq);
+            foot_w = (dq * foot_w).normalized();
+          }
+        }
         if (toe_pin) {  // the ankle, the foot turning about the toe
           if (still) foot_w = pose::roll_foot_into_reach(foot_w, target, t, hip, reach_[side], cfg_.max_foot_roll);
           target -= foot_w * t;
@@ -550,6 +578,42 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
       lock_[side].show(out_.world().rotation[l[2]]);
     }
   }
+  // The standing foot from g_lo^0 (the predictor's first state, a standing pose in h^0): the pinned
+  // joint's height and the ankle's elevation above the toe.
+  void standing_feet() noexcept {
+    const auto& m = pred_.meta();
+    auto at = [&](int joint) {
+      for (int i = 0; i < features::n3p::kLowerJoints; ++i)
+        if (m.lower[i] == joint) return Eigen::Vector3d(m.glo0.data() + features::n3p::LowerBlock::pos(i));
+      return Eigen::Vector3d(0.0, 0.0, 0.0);
+    };
+    for (int side = 0; side < 2; ++side) {
+      const Eigen::Vector3d ankle = at(leg_[side][2]);
+      stand_pin_y_[side] = ankle.y();
+      if (toe_[side] < 0) continue;
+      const Eigen::Vector3d e = ankle - at(toe_[side]);
+      if (cfg_.pin == N3PConfig::Pin::Toe) stand_pin_y_[side] = at(toe_[side]).y();
+      stand_elevation_[side] = e.norm() > 1e-6 ? std::asin(std::clamp(e.y() / e.norm(), -1.0, 1.0)) : 0.0;
+    }
+  }
+
+  // N3PConfig::platform_height: while the user stands still and every held foot is pinned above the
+  // floor, the pins rise by up to `want` (at most platform_rise_step); returns how far.
+  double raise_platform_pins(double want) noexcept {
+    if (!(want > 0) || !cfg_.hold_feet_when_still || !still_.still() || airborne_ > 0) return 0.0;
+    bool any = false;
+    for (int side = 0; side < 2; ++side) {
+      if (lock_[side].state() != pose::FootLock::State::Locked) continue;
+      if (!(lock_[side].lock_position().y() > stand_pin_y_[side] + cfg_.platform_height)) return 0.0;
+      any = true;
+    }
+    if (!any) return 0.0;
+    const double dy = std::min(want, cfg_.platform_rise_step);
+    for (auto& l : lock_)
+      if (l.state() == pose::FootLock::State::Locked) l.raise(dy);
+    return dy;
+  }
+
   // Where a pinned foot's ankle is: the pin itself, or the toe pin less the foot's toe offset, the
   // foot as last shown (planted while the user stands; the network's foot may be heel-up).
   Eigen::Vector3d ankle_pin(int side) const noexcept {
@@ -598,6 +662,8 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   int head_ = -1;
   pose::ChainReach spine_;
   double reach_[2] = {};
+  double stand_pin_y_[2] = {};      // standing_feet(): the pinned joint's height (m, standard scale)
+  double stand_elevation_[2] = {};  // ... and the ankle's elevation above the toe (rad)
   double lift_ = 0.0;  // the vertical offset follow_head_height() gave the last frame (m, standard scale)
   double headset_y_[2] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};  // last 2 frames'
   double head_vy_ = std::numeric_limits<double>::quiet_NaN();  // track_headset_height

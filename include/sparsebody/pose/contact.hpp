@@ -119,6 +119,17 @@ class FootLock {
     shown_foot_ = foot;
     foot_shown_ = true;
   }
+  // The orientation a foot locked while still keeps (orient()); turn_planted(dq) turns it by dq
+  // (world frame): Neural3Points lowers a heel a stop left up (pose::lower_heel).
+  const Eigen::Quaterniond& planted() const noexcept { return planted_; }
+  void turn_planted(const Eigen::Quaterniond& dq) noexcept { planted_ = (dq * planted_).normalized(); }
+  // Moves a lock vertically by dy with what it was made from (Neural3Points: held feet on a step
+  // rise with the head while the user stands; avatar/n3p_direct.hpp).
+  void raise(double dy) noexcept {
+    for (Eigen::Vector3d* p : {&lock_, &from_, &current_}) p->y() += dy;
+    caught_y_ += dy;
+    if (std::isfinite(contact_y_)) contact_y_ += dy;
+  }
   // The last show()n rotation; nullptr when none since reset() (lock_in_place() keeps it).
   const Eigen::Quaterniond* shown_foot() const noexcept { return foot_shown_ ? &shown_foot_ : nullptr; }
   // Under hold, how far (m per frame, the joint's units) the network's joint may move for a held-off

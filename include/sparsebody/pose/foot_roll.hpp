@@ -14,6 +14,9 @@
 // k = (|q|^2 + r^2 - reach^2) / (2 r): an interval of theta about phi, whose point nearest 0 is taken.
 // Without the roll, such a pin slid or was released and its toe slid with it. The direct mode rolls
 // only feet held while the user stands still (avatar/n3p_direct.hpp).
+// lower_heel is the other way: a foot held heel-up (a stop caught the rear foot at its push-off)
+// comes down about the same axis towards the standing foot's elevation; the roll then raises it
+// again as far as the leg's reach needs.
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -25,8 +28,9 @@
 namespace sparsebody::pose {
 
 // `foot` turned about its lateral axis through `toe` so that its ankle (toe - foot * t) is within
-// 0.999 `reach` of `hip`; unchanged when it is in reach already, when no turn of at most `max_roll`
-// radians within the elevation bounds reaches, or for a degenerate (vertical or zero-length) foot.
+// 0.999 `reach` of `hip`; unchanged when it is in reach already or for a degenerate (vertical or
+// zero-length) foot. When no turn of at most `max_roll` radians within the elevation bounds reaches,
+// the allowed turn that brings the ankle nearest the hip (unchanged if none brings it nearer).
 // Never non-finite for finite input.
 inline Eigen::Quaterniond roll_foot_into_reach(const Eigen::Quaterniond& foot, const Eigen::Vector3d& toe,
                                                const Eigen::Vector3d& t, const Eigen::Vector3d& hip, double reach,
@@ -41,20 +45,44 @@ inline Eigen::Quaterniond roll_foot_into_reach(const Eigen::Quaterniond& foot, c
   const Eigen::Vector3d u1 = e / r, u2 = a.cross(u1);
   const double p1 = q.dot(u1), p2 = q.dot(u2), pv = std::hypot(p1, p2);
   const double k = (q.squaredNorm() + r * r - want * want) / (2 * r);
-  if (!(k < pv)) return foot;  // beyond reach whatever the roll
-  const double phi = std::atan2(p2, p1), alpha = std::acos(std::max(-1.0, k / pv));
+  const double phi = std::atan2(p2, p1);
+  const double alpha = k < pv ? std::acos(std::max(-1.0, k / pv)) : -1.0;  // -1: beyond reach whatever the roll
   // theta > 0 raises the ankle (heel up): the ankle's elevation above the toe, beta + theta, stays
   // within [0, 80 deg] (a heel below its toe, or a foot turned over, is no foot)
   const double beta = std::asin(std::clamp(e.y() / r, -1.0, 1.0));
   // theta - phi within [-alpha, alpha] modulo 2 pi: the interval and its neighbours a turn away
   double theta = std::numeric_limits<double>::infinity();
-  for (int turn = -1; turn <= 1; ++turn) {
+  for (int turn = -1; turn <= 1 && alpha >= 0; ++turn) {
     const double c = phi + 2 * M_PI * turn;
     const double lo = std::max({c - alpha, -max_roll, -beta}), hi = std::min({c + alpha, max_roll, 1.3962634015954636 - beta});
     if (lo <= hi && std::abs(std::clamp(0.0, lo, hi)) < std::abs(theta)) theta = std::clamp(0.0, lo, hi);
   }
-  if (!std::isfinite(theta)) return foot;
+  if (!std::isfinite(theta)) {
+    // no allowed turn reaches: turn as far as allowed towards phi (where the ankle is nearest the
+    // hip), so that what the caller does next (a held pin slides into reach) is as small as it can
+    // be and continuous from the frame before
+    const double bl = std::max(-max_roll, -beta), bh = std::min(max_roll, 1.3962634015954636 - beta);
+    if (!(bl <= bh)) return foot;
+    theta = std::clamp(std::remainder(phi, 2 * M_PI), bl, bh);
+    if (!(q.squaredNorm() + r * r - 2 * r * (p1 * std::cos(theta) + p2 * std::sin(theta)) < (q - e).squaredNorm())) return foot;
+  }
   return (Eigen::AngleAxisd(theta, a) * foot).normalized();
+}
+
+// `foot` turned about its lateral axis through the toe so that the ankle's elevation above the toe
+// (the angle of toe -> ankle, -(foot * t), above the horizontal) comes down towards `elevation` by at
+// most `max_turn` radians; unchanged when it is at or below `elevation`, or for a degenerate foot.
+inline Eigen::Quaterniond lower_heel(const Eigen::Quaterniond& foot, const Eigen::Vector3d& t, double elevation,
+                                     double max_turn) noexcept {
+  const Eigen::Vector3d e = -(foot * t);
+  const double r = e.norm();
+  if (!(r > 1e-9)) return foot;
+  Eigen::Vector3d a = e.cross(Eigen::Vector3d::UnitY());  // as roll_foot_into_reach: +angle raises the ankle
+  if (!(a.norm() > 1e-9 * r)) return foot;
+  const double beta = std::asin(std::clamp(e.y() / r, -1.0, 1.0));
+  const double turn = std::min(beta - elevation, max_turn);
+  if (!(turn > 0)) return foot;
+  return (Eigen::AngleAxisd(-turn, a.normalized()) * foot).normalized();
 }
 
 }  // namespace sparsebody::pose
