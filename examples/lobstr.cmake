@@ -5,6 +5,7 @@ target_link_libraries(sparsebody_demo PRIVATE sparsebody::sparsebody sparsebody_
 target_compile_definitions(sparsebody_demo PRIVATE
   SPARSEBODY_DEFAULT_WEIGHTS="${CMAKE_CURRENT_SOURCE_DIR}/weights/lobstr_compact.weights.json"
   SPARSEBODY_DEFAULT_N3P_WEIGHTS="${CMAKE_CURRENT_SOURCE_DIR}/weights/n3p"
+  SPARSEBODY_DEFAULT_N3P_PHYSICS_WEIGHTS="${CMAKE_CURRENT_SOURCE_DIR}/weights/n3p_physics"
   SPARSEBODY_DEFAULT_QUESTSIM_WEIGHTS="${CMAKE_CURRENT_SOURCE_DIR}/weights/questsim_policy.json")
 # --html: the page template and npm's three.js (npm ci --prefix examples/viewer; the demo falls back
 # to Debian's libjs-three when it is missing, and --three-js PATH overrides both).

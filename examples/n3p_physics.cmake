@@ -3,7 +3,7 @@
 add_executable(n3p_physics_eval ${CMAKE_CURRENT_LIST_DIR}/n3p_physics_eval.cpp)
 target_link_libraries(n3p_physics_eval PRIVATE sparsebody::sparsebody sparsebody_dev_flags)
 target_compile_definitions(n3p_physics_eval PRIVATE
-  SPARSEBODY_N3P_WEIGHTS="${CMAKE_CURRENT_LIST_DIR}/weights/n3p")
+  SPARSEBODY_N3P_WEIGHTS="${CMAKE_CURRENT_LIST_DIR}/weights/n3p_physics")
 if(SPARSEBODY_BUILD_TESTS AND SPARSEBODY_PYTHON_TESTS)
   # The shipped correction policy against the model-based controller on validation clips (needs ../shared).
   add_test(NAME n3p_correction_policy_test

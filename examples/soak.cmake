@@ -7,4 +7,5 @@ target_include_directories(sparsebody_soak PRIVATE ${PROJECT_SOURCE_DIR}/tests) 
 target_compile_definitions(sparsebody_soak PRIVATE
   SPARSEBODY_DEFAULT_WEIGHTS="${CMAKE_CURRENT_LIST_DIR}/weights/lobstr_compact.weights.json"
   SPARSEBODY_DEFAULT_N3P_WEIGHTS="${CMAKE_CURRENT_LIST_DIR}/weights/n3p"
+  SPARSEBODY_DEFAULT_N3P_PHYSICS_WEIGHTS="${CMAKE_CURRENT_LIST_DIR}/weights/n3p_physics"
   SPARSEBODY_DEFAULT_QUESTSIM_WEIGHTS="${CMAKE_CURRENT_LIST_DIR}/weights/questsim_policy.json")

@@ -226,7 +226,9 @@ std::optional<Model> choose_model(const Options& o, const Input& in) {
 }
 
 int run_neural3points(Options& o, Input& in) {
-  if (o.weights.empty()) o.weights = SPARSEBODY_DEFAULT_N3P_WEIGHTS;
+  // Physics mode keeps the predictor its controller and correction policy were tuned with
+  // (examples/weights/N3P_README.md); direct mode the device-fine-tuned one.
+  if (o.weights.empty()) o.weights = o.physics ? SPARSEBODY_DEFAULT_N3P_PHYSICS_WEIGHTS : SPARSEBODY_DEFAULT_N3P_WEIGHTS;
   if (o.physics) {
     if (o.storage == "f16") return run_n3p_physics<nn::f16>(o, in);
     if (o.storage == "q8") return run_n3p_physics<nn::q8>(o, in);

@@ -73,7 +73,7 @@ struct N3PPhysicsAdapter
     : KinematicAdapter<sb::avatar::N3PPhysicsPipeline<float, 64, 128, 128, float, 24, 72, W>, sb::features::n3p::N3PCalibration> {
   using P = sb::avatar::N3PPhysicsPipeline<float, 64, 128, 128, float, 24, 72, W>;
   explicit N3PPhysicsAdapter(double clip_leg)
-      : KinematicAdapter<P, sb::features::n3p::N3PCalibration>(P::load(SPARSEBODY_DEFAULT_N3P_WEIGHTS), clip_leg) {}
+      : KinematicAdapter<P, sb::features::n3p::N3PCalibration>(P::load(SPARSEBODY_DEFAULT_N3P_PHYSICS_WEIGHTS), clip_leg) {}
   void counters(Report& r) const {
     r.max_drift_p99 = 1.0;  // the output is 0.1 s behind the input, and falls reset the character
     r.falls = this->pipe.falls();

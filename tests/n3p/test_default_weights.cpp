@@ -151,10 +151,11 @@ TEST_CASE("n3p default weights: head height: the body walks up onto a platform a
   MESSAGE("0.4 m up: head " << 100 * up_on << " cm from the headset (" << 100 * up_off << " cm without head_height), lowest toe "
                              << 100 * toe_on << " cm (" << 100 * toe_off << ")");
   CHECK(up_off > 0.25);
-  // the dead band (2 cm, standard scale) and the pinned legs' 2 % reserve: standing on the
-  // platform the feet stay pinned, and the network's legs are nearly straight already
-  CHECK(up_on < 0.05);
-  CHECK(toe_on > 0.25);  // the feet came up with the body (pins made on the platform)
+  // the dead band (2 cm, standard scale) and a little: the walk ends with feet pinned where its last
+  // steps were made, below the platform, and while the user stands they rise with the head
+  // (N3PConfig::platform_height; without it the head stayed 4-11 cm below, by the weights)
+  CHECK(up_on < 0.03);
+  CHECK(toe_on > 0.35);  // the feet came up with the body onto the 0.4 m platform
   const double down_on = run(true, false, &toe_on), down_off = run(false, false, &toe_off);
   MESSAGE("0.6 m down: head " << 100 * down_on << " cm from the headset (" << 100 * down_off << " cm without head_height), lowest toe "
                                << 100 * toe_on << " cm (" << 100 * toe_off << ")");

@@ -51,7 +51,8 @@ using ArrB = py::array_t<bool, kIn>;
 
 std::string default_weights(const std::string& model) {
   const std::string dir = SPARSEBODY_SOURCE_DIR "/examples/weights/";
-  return model == "lobstr" ? dir + "lobstr_compact.weights.json" : dir + "n3p";
+  // Neural3Points physics mode keeps the predictor its controller and correction policy were tuned with.
+  return model == "lobstr" ? dir + "lobstr_compact.weights.json" : model == "n3p_physics" ? dir + "n3p_physics" : dir + "n3p";
 }
 
 std::string resolve_storage(const std::string& s) {
@@ -281,7 +282,7 @@ std::unique_ptr<Pipeline> create(const std::string& model, std::string weights, 
                             std::to_string(latent) + " (compiled: 256/128 and 1024/128)");
     what = "LoBSTr H=" + std::to_string(hidden) + " latent=" + std::to_string(latent) + ", " + mode;
   } else if (model == "n3p" || model == "n3p_physics") {
-    if (weights.empty()) weights = default_weights("n3p");
+    if (weights.empty()) weights = default_weights(model);
     if (mode != "streaming") throw py::value_error("mode window is LoBSTr-only; Neural3Points always streams");
     if (model == "n3p") {
       avatar::N3PConfig cfg;

@@ -21,6 +21,11 @@ import time
 from .. import pymod
 from .train import DEFAULT_MOTIONS, pick_clips
 
+# The predictor the physics pipeline runs by default (its controller and correction policy were tuned
+# with it; examples/weights/N3P_README.md).
+N3P_PHYSICS_WEIGHTS = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+                                   "examples", "weights", "n3p_physics")
+
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -38,7 +43,7 @@ def main(argv=None):
     for i, path in enumerate(paths):
         out = os.path.join(a.out_dir, os.path.basename(path))
         try:  # a bad clip stops the run with the module's one-line message (it names the file)
-            run = pymod.run_clip(sb, path, "n3p")
+            run = pymod.run_clip(sb, path, "n3p", weights=N3P_PHYSICS_WEIGHTS)
             sb.write_bvh(out, run.pipe, run.out)
         except (OSError, ValueError) as e:
             raise SystemExit(str(e) if path in str(e) else f"{path}: {e}") from None

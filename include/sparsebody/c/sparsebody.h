@@ -96,7 +96,8 @@ typedef enum sb_storage {
 typedef enum sb_pipeline_kind {
   SB_PIPELINE_LOBSTR = 1,      /* SB_MODEL_LOBSTR weights; needs the pelvis tracker */
   SB_PIPELINE_N3P_DIRECT = 2,  /* SB_MODEL_N3P weights; headset + controllers */
-  SB_PIPELINE_N3P_PHYSICS = 3, /* SB_MODEL_N3P weights; simulated avatar, output 0.1 s behind */
+  SB_PIPELINE_N3P_PHYSICS = 3, /* SB_MODEL_N3P weights (shipped for it: examples/weights/n3p_physics, the predictor its
+                                  controller was tuned with); simulated avatar, output 0.1 s behind */
   SB_PIPELINE_QUESTSIM = 4     /* SB_MODEL_QUESTSIM weights; headset + controllers; torque policy on a simulated
                                   avatar sized by the calibration's stature, output 0.17 s behind; contact_ik unused */
 } sb_pipeline_kind;
