@@ -206,3 +206,40 @@ TEST_CASE("n3p pipeline: no allocation per frame while a standing foot rolls ove
   CHECK(rolled.toe_step < 2 * drift_speed / avatar::N3PDirect(w).meta().frame_rate);
   CHECK(fixed.toe_step > 0.0002);     // without the roll the hip drags the toe
 }
+
+// Held feet on a platform (N3PConfig::platform_height): the user walks up a 0.4 m ramp and stands;
+// the feet pinned on the ramp rise with the head while the user stands. That branch, and the heel
+// settling of the feet held at the stop, allocate nothing. The test checks that the rise ran: the
+// toes end on the platform and the head on the headset (with the rise off, the shipped weights left
+// the head 10.6 cm below it, the toes 33 cm up).
+TEST_CASE("n3p pipeline: no allocation per frame while held feet rise onto a platform, shipped weights") {
+  using sparsebody_test::Phase;
+  auto frames = sparsebody_test::session({{Phase::Stand, 2.0, 1.62}, {Phase::Walk, 2.0, 1.62}, {Phase::Stand, 3.0, 1.62}}, 72.0, 0.3, false);
+  for (auto& f : frames) {
+    const double d = 0.4 * std::clamp((f.time - 2.0) / 2.0, 0.0, 1.0);
+    for (auto& pose : f.pose) pose.position.y += static_cast<float>(d);
+  }
+  avatar::N3PDirect p(avatar::N3PDirect::load(std::string(SPARSEBODY_SOURCE_DIR) + "/examples/weights/n3p"));
+  REQUIRE(p.calibrate(frames.front()));
+  const int toe[2] = {p.joint_map()[pose::Role::ToeL], p.joint_map()[pose::Role::ToeR]};
+  const int head = p.joint_map()[pose::Role::Head];
+  for (int i = 0; i < 3; ++i) p.push(frames[static_cast<std::size_t>(i)]);
+  double lowest_toe = 1e9, head_err = 0;
+  int n = 0;
+  long long allocations = 0;
+  {
+    sparsebody_test::AllocationCounter counter;
+    for (std::size_t i = 3; i < frames.size(); ++i) {
+      if (p.push(frames[i]) == 0 || !p.has_output() || frames[i].time < 6.0) continue;
+      for (int k = 0; k < 2; ++k) lowest_toe = std::min(lowest_toe, p.world().position[toe[k]].y() * p.user_scale());
+      head_err += std::abs(p.world().position[head].y() - p.trackers()[0].p.y()) * p.user_scale();
+      ++n;
+    }
+    allocations = counter.count();
+  }
+  REQUIRE(n > 20);
+  MESSAGE("on the platform: lowest toe " << 100 * lowest_toe << " cm, head " << 100 * head_err / n << " cm from the headset");
+  CHECK(allocations == 0);
+  CHECK(lowest_toe > 0.35);
+  CHECK(head_err / n < 0.03);
+}
