@@ -579,21 +579,24 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     }
   }
   // The standing foot from g_lo^0 (the predictor's first state, a standing pose in h^0): the pinned
-  // joint's height and the ankle's elevation above the toe.
+  // joint's height and the ankle's elevation above the toe. A skeleton whose foot or toe is not in
+  // J_lo has no such pose: both stay +inf, and the heel settle and the platform rise never act.
   void standing_feet() noexcept {
     const auto& m = pred_.meta();
-    auto at = [&](int joint) {
+    auto at = [&](int joint, Eigen::Vector3d& p) {
       for (int i = 0; i < features::n3p::kLowerJoints; ++i)
-        if (m.lower[i] == joint) return Eigen::Vector3d(m.glo0.data() + features::n3p::LowerBlock::pos(i));
-      return Eigen::Vector3d(0.0, 0.0, 0.0);
+        if (joint >= 0 && m.lower[i] == joint) {
+          p = Eigen::Vector3d(m.glo0.data() + features::n3p::LowerBlock::pos(i));
+          return true;
+        }
+      return false;
     };
     for (int side = 0; side < 2; ++side) {
-      const Eigen::Vector3d ankle = at(leg_[side][2]);
-      stand_pin_y_[side] = ankle.y();
-      if (toe_[side] < 0) continue;
-      const Eigen::Vector3d e = ankle - at(toe_[side]);
-      if (cfg_.pin == N3PConfig::Pin::Toe) stand_pin_y_[side] = at(toe_[side]).y();
-      stand_elevation_[side] = e.norm() > 1e-6 ? std::asin(std::clamp(e.y() / e.norm(), -1.0, 1.0)) : 0.0;
+      stand_pin_y_[side] = stand_elevation_[side] = std::numeric_limits<double>::infinity();
+      Eigen::Vector3d ankle, toe;
+      const bool has_ankle = at(leg_[side][2], ankle), has_toe = at(toe_[side], toe);
+      if (cfg_.pin == N3PConfig::Pin::Toe ? has_toe : has_ankle) stand_pin_y_[side] = (cfg_.pin == N3PConfig::Pin::Toe ? toe : ankle).y();
+      if (has_ankle && has_toe) stand_elevation_[side] = pose::ankle_elevation(ankle - toe);
     }
   }
 
@@ -662,8 +665,8 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   int head_ = -1;
   pose::ChainReach spine_;
   double reach_[2] = {};
-  double stand_pin_y_[2] = {};      // standing_feet(): the pinned joint's height (m, standard scale)
-  double stand_elevation_[2] = {};  // ... and the ankle's elevation above the toe (rad)
+  double stand_pin_y_[2] = {};      // standing_feet(): the pinned joint's height (m, standard scale; +inf: unknown)
+  double stand_elevation_[2] = {};  // ... and the ankle's elevation above the toe (rad; +inf: unknown)
   double lift_ = 0.0;  // the vertical offset follow_head_height() gave the last frame (m, standard scale)
   double headset_y_[2] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};  // last 2 frames'
   double head_vy_ = std::numeric_limits<double>::quiet_NaN();  // track_headset_height
