@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "sparsebody/core/one_copy.hpp"
 #include "sparsebody/avatar/lobstr_upper_body.hpp"
 #include "sparsebody/avatar/pipeline_front_end.hpp"
 #include "sparsebody/features/auto_calibration.hpp"
@@ -194,7 +195,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   // nullptr when the frame is not usable (then the frame is done); end_step(y) takes the
   // network's outputs for that input and does the rest. step(f) = begin_step(f), then
   // end_step(run_network()). The network's state is network() (Streaming mode: one step per frame).
-  const T* begin_step(const trackers::TrackerFrame& f, bool restart = false) noexcept {
+  SPARSEBODY_ONE_COPY const T* begin_step(const trackers::TrackerFrame& f, bool restart = false) noexcept {
     const trackers::SanitizedFrame& s = stream_.sanitize(f);
     if (restart || s.reset) {
       reset_state();
@@ -251,7 +252,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     feat_.compute(cal_, x_);
     return x_;
   }
-  void end_step(const T* y) noexcept {
+  SPARSEBODY_ONE_COPY void end_step(const T* y) noexcept {
     for (int i = 0; i < Net::out_size; ++i) y_[i] = y[i];
     decode_lower_body();
     if (cfg_.upper_body_ik) upper_.solve(body_, cal_, out_.pose(), out_.world());

@@ -45,6 +45,7 @@
 #include <limits>
 #include <string>
 
+#include "sparsebody/core/one_copy.hpp"
 #include "sparsebody/avatar/pipeline_front_end.hpp"
 #include "sparsebody/features/auto_calibration.hpp"
 #include "sparsebody/features/device_model.hpp"
@@ -285,7 +286,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   // frame is done (no headset yet, or a frame the predictor cannot use); then the predictor's
   // phases run (predictor().begin_input() is G_sig's input; after_signal, after_lower, finish),
   // and end_step(finish's result) does the rest. Equal to step() bit for bit.
-  bool begin_step(const trackers::TrackerFrame& f, bool restart = false) noexcept {
+  SPARSEBODY_ONE_COPY bool begin_step(const trackers::TrackerFrame& f, bool restart = false) noexcept {
     trackers::TrackerFrame head_only = f;  // the sanitizer looks after the headset only
     head_only.valid[1] = head_only.valid[2] = head_only.valid[3] = false;
     const trackers::SanitizedFrame& s = stream_.sanitize(head_only);
@@ -346,7 +347,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     present_ = present;
     return pred_.begin(o, present) != nullptr;
   }
-  void end_step(bool predicted) noexcept {
+  SPARSEBODY_ONE_COPY void end_step(bool predicted) noexcept {
     if (!predicted) return;
     const features::n3p::TrackerSet& o = trackers_;
     const std::array<bool, 3>& present = present_;

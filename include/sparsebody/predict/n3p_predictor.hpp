@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "sparsebody/core/one_copy.hpp"
 #include "sparsebody/core/error.hpp"
 #include "sparsebody/features/heading_frame.hpp"
 #include "sparsebody/features/n3p_state.hpp"
@@ -168,7 +169,7 @@ class N3PPredictor {
     std::copy(gup_, gup_ + n3p::kGup, x_up_ + n3p::kO);
     return x_up_;
   }
-  bool finish(const T* yup) noexcept {
+  SPARSEBODY_ONE_COPY bool finish(const T* yup) noexcept {
     const T* ylo = ylo_;
     const features::HeadingFrame& h = h_next_;
     if (!finite(ylo, n3p::kLoOut) || !finite(yup, n3p::kUpOut) || !finite(z_, n3p::kZ) || !h.finite()) {
