@@ -432,8 +432,8 @@ void print_target() {
     if (line.rfind("cpu family", 0) == 0 && family.empty()) family = line.substr(line.find(':') + 2);
   }
   const nn::StorageChoice c = nn::fastest_storage();
-  std::printf("CPU: %s (family %s); build: %d float lanes, int8 kernel %s, f16 widening %s; storage auto -> %s\n",
-              model.c_str(), family.c_str(), nn::kLanes<float>, nn::q8_kernel_name(nn::kQ8Kernel),
+  std::printf("CPU: %s (family %s); build: %d float lanes, int8 kernel %s (SPARSEBODY_Q8_RUNTIME=off: the build's own), f16 widening %s; storage auto -> %s\n",
+              model.c_str(), family.c_str(), nn::kLanes<float>, nn::q8_kernel_in_use(),
               nn::kF16Hardware ? "in hardware" : "portable", nn::storage_name(c.storage));
 }
 

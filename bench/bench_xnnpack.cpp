@@ -383,7 +383,7 @@ void print_target() {
       break;
     }
   std::printf("CPU: %s; sparsebody build: %d float lanes, int8 kernel %s; XNNPACK picks its kernels at run time (CPUID)\n",
-              model.c_str(), nn::kLanes<float>, nn::q8_kernel_name(nn::kQ8Kernel));
+              model.c_str(), nn::kLanes<float>, nn::q8_kernel_in_use());
 }
 
 }  // namespace

@@ -6,7 +6,8 @@
 //  - int8: the instruction sequence of the build's q8 kernel per product (nn/int8.hpp), without its
 //    loads: AVX-512 VNNI and AVX-VNNI one vpdpbusd per 64 / 32 products, AVX2 vpsignb + vpmaddubsw +
 //    vpmaddwd + vpaddd per 32 (the sign trick that keeps the int16 pair sums exact), NEON with
-//    dot-product one sdot per 16, plain NEON smull + sadalp per 8, otherwise scalar int32.
+//    dot-product one sdot per 16, plain NEON smull + sadalp per 8, otherwise scalar int32; where the
+//    CPU upgrades gemv at run time (nn/int8.hpp), the upgrade's sequence.
 // Each benchmark iteration performs `macs` multiply-adds (rounded up to whole blocks); its time is
 // the least a kernel doing that many can take on one core.
 #pragma once
@@ -42,8 +43,56 @@ inline std::int64_t fma_f32_block(std::int64_t blocks) {
   return blocks * kChains * std::int64_t(B::size);
 }
 
-// int8 products with int32 sums, the build's q8 kernel's instructions; returns the products done.
+// The run-time upgrades' sequences (nn/int8.hpp "Run-time upgrade"): one 256-bit vpdpbusd per 32
+// products (VEX or EVEX form), one sdot per 16; compiled for the feature, run only where the CPU has it.
+#if SPARSEBODY_Q8_RUNTIME_X86
+#define SPARSEBODY_BENCH_DPBUSD256(NAME, TARGET, DPBUSD)                                           \
+  __attribute__((target(TARGET))) inline std::int64_t NAME(std::int64_t blocks) {                 \
+    __m256i acc[kChains];                                                                         \
+    for (int k = 0; k < kChains; ++k) acc[k] = _mm256_set1_epi32(k);                              \
+    __m256i a = _mm256_set1_epi8(3), b = _mm256_set1_epi8(-5);                                    \
+    benchmark::DoNotOptimize(a);                                                                  \
+    benchmark::DoNotOptimize(b);                                                                  \
+    for (std::int64_t i = 0; i < blocks; ++i)                                                     \
+      for (int k = 0; k < kChains; ++k) acc[k] = DPBUSD(acc[k], a, b);                            \
+    for (int k = 0; k < kChains; ++k) benchmark::DoNotOptimize(acc[k]);                           \
+    return blocks * kChains * 32;                                                                 \
+  }
+SPARSEBODY_BENCH_DPBUSD256(dot_i8_avx_vnni_rt, "avx2,avxvnni", _mm256_dpbusd_avx_epi32)
+SPARSEBODY_BENCH_DPBUSD256(dot_i8_avx512vl_vnni_rt, "avx2,avx512f,avx512vl,avx512vnni", _mm256_dpbusd_epi32)
+#undef SPARSEBODY_BENCH_DPBUSD256
+#endif
+#if SPARSEBODY_Q8_RUNTIME_ARM
+#if defined(__clang__)
+__attribute__((target("dotprod")))
+#else
+__attribute__((target("arch=armv8.2-a+dotprod")))
+#endif
+inline std::int64_t dot_i8_neon_dot_rt(std::int64_t blocks) {
+  int32x4_t acc[kChains];
+  for (int k = 0; k < kChains; ++k) acc[k] = vdupq_n_s32(k);
+  int8x16_t a = vdupq_n_s8(3), b = vdupq_n_s8(-5);
+  benchmark::DoNotOptimize(a);
+  benchmark::DoNotOptimize(b);
+  for (std::int64_t i = 0; i < blocks; ++i)
+    for (int k = 0; k < kChains; ++k) acc[k] = vdotq_s32(acc[k], a, b);
+  for (int k = 0; k < kChains; ++k) benchmark::DoNotOptimize(acc[k]);
+  return blocks * kChains * 16;
+}
+#endif
+
+// int8 products with int32 sums, the q8 kernel's instructions (the run-time upgrade's where gemv
+// takes one); returns the products done.
 inline std::int64_t dot_i8_block(std::int64_t blocks) {
+  using sparsebody::nn::kQ8Upgrade;
+  using sparsebody::nn::detail::Q8Upgrade;
+#if SPARSEBODY_Q8_RUNTIME_X86
+  if (kQ8Upgrade == Q8Upgrade::avx_vnni) return dot_i8_avx_vnni_rt(blocks);
+  if (kQ8Upgrade == Q8Upgrade::avx512vl_vnni) return dot_i8_avx512vl_vnni_rt(blocks);
+#endif
+#if SPARSEBODY_Q8_RUNTIME_ARM
+  if (kQ8Upgrade == Q8Upgrade::neon_dot) return dot_i8_neon_dot_rt(blocks);
+#endif
 #if SPARSEBODY_Q8_AVX512 && defined(__AVX512VNNI__)
   if constexpr (sparsebody::nn::kQ8Kernel == sparsebody::nn::Q8Kernel::avx512_vnni) {
     __m512i acc[kChains];

@@ -94,7 +94,9 @@ Options parse_options(int argc, char** argv) {
   if (o.storage == "auto") {  // the build's fastest storage (nn/storage.hpp)
     const sparsebody::nn::StorageChoice c = sparsebody::nn::fastest_storage();
     o.storage = sparsebody::nn::storage_name(c.storage);
-    std::printf("storage auto -> %s (%s)\n", o.storage.c_str(), c.reason);
+    std::printf("storage auto -> %s (%s)%s%s\n", o.storage.c_str(), c.reason,
+                c.storage == sparsebody::nn::Storage::q8 ? "; int8 kernel in use: " : "",
+                c.storage == sparsebody::nn::Storage::q8 ? sparsebody::nn::q8_kernel_in_use() : "");
   }
   return o;
 }

@@ -5,6 +5,7 @@
 // (native, x86-64-v3, x86-64-v3 + AVX-VNNI, x86-64, ARM64 with and without dot product); each build
 // checks the kernels it has and says which.
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <random>
 #include <string>
@@ -114,6 +115,74 @@ TEST_CASE("int8 kernels of this build equal the portable kernel bit for bit, ext
         }
       }
   MESSAGE(compared << " products compared");
+}
+
+TEST_CASE("int8 run-time upgrades this CPU has equal the portable kernel bit for bit; gemv() takes the first") {
+  // nn/int8.hpp "Run-time upgrade": an AVX2 build on a VNNI CPU, an armv8-a build on a dot-product
+  // CPU. Each upgrade the CPU runs is compared on the first test's grid and on the +-127 extreme;
+  // the ones it lacks are named as skipped (on this build's CPU the list says which ran).
+  using nn::detail::Q8Upgrade;
+  std::string ran, skipped;
+  std::mt19937 rng(11);
+  constexpr int L = nn::kLanes<float>;
+  const int row_counts[] = {1, 2 * L + 3, 7 * L + 1, 8 * L, 19 * L + 2};
+  const int col_counts[] = {1, 5, 37, 129, 868};
+  long compared = 0;
+  for (Q8Upgrade u : {Q8Upgrade::avx_vnni, Q8Upgrade::avx512vl_vnni, Q8Upgrade::neon_dot}) {
+    if (!nn::detail::q8_cpu_has(u)) {
+      skipped += std::string(skipped.empty() ? "" : "; ") + nn::detail::q8_upgrade_name(u);
+      continue;
+    }
+    ran += std::string(ran.empty() ? "" : "; ") + nn::detail::q8_upgrade_name(u);
+    for (int rows : row_counts)
+      for (int cols : col_counts)
+        for (int kind = 0; kind < 3; ++kind) {
+          std::vector<float> w(static_cast<std::size_t>(rows) * cols);
+          for (float& v : w) v = draw(rng, kind);
+          if (kind == 1 && rows == 8 * L)  // the extreme: every Q and q at +-127, sums of 127 * 127 * cols
+            for (int r = 0; r < rows; ++r)
+              for (int c = 0; c < cols; ++c) w[static_cast<std::size_t>(r) * cols + c] = r % 2 ? -1.f : 1.f;
+          Packed p(w, rows, cols);
+          AlignedBuffer<float> bias(nn::padded<float>(rows)), y0(nn::padded<float>(rows)), y1(nn::padded<float>(rows));
+          for (int r = 0; r < rows; ++r) bias[r] = draw(rng, 0);
+          std::vector<float> x(cols);
+          for (int rep = 0; rep < 3; ++rep) {
+            for (float& v : x) v = rep == 0 ? 1.f : draw(rng, kind) * (rep == 2 ? 1e-3f : 1.f);
+            gemv_kernel(Q8Kernel::portable, p.m, x.data(), rep == 1 ? nullptr : bias.data(), y0.data());
+            for (int r = 0; r < nn::padded<float>(rows); ++r) y1[r] = -12345.f;
+            nn::gemv_q8_upgrade(u, p.m, x.data(), rep == 1 ? nullptr : bias.data(), y1.data());
+            for (int r = 0; r < nn::padded<float>(rows); ++r)
+              REQUIRE_MESSAGE(same_bits(y0[r], y1[r]), nn::detail::q8_upgrade_name(u) << " rows " << rows << " cols " << cols
+                                                                                      << " kind " << kind << " rep " << rep
+                                                                                      << " row " << r << ": " << y1[r]
+                                                                                      << " vs portable " << y0[r]);
+            ++compared;
+          }
+        }
+  }
+  MESSAGE("upgrades compared with portable: " << (ran.empty() ? "none" : ran) << " (" << compared
+                                              << " products); not on this CPU or build: " << (skipped.empty() ? "none" : skipped));
+  // gemv() runs the first upgrade the CPU has, unless SPARSEBODY_Q8_RUNTIME=off (or 0).
+  const char* env = std::getenv("SPARSEBODY_Q8_RUNTIME");
+  const bool off = env && (std::string(env) == "off" || std::string(env) == "0");
+  Q8Upgrade expect = Q8Upgrade::none;
+  for (Q8Upgrade u : {Q8Upgrade::avx_vnni, Q8Upgrade::avx512vl_vnni, Q8Upgrade::neon_dot})
+    if (!off && expect == Q8Upgrade::none && nn::detail::q8_cpu_has(u)) expect = u;
+  CHECK(nn::kQ8Upgrade == expect);
+  MESSAGE("gemv runs: " << std::string(nn::q8_kernel_in_use()) << std::string(off ? " (SPARSEBODY_Q8_RUNTIME=off)" : ""));
+#if !SPARSEBODY_Q8_RUNTIME_X86 && !SPARSEBODY_Q8_RUNTIME_ARM
+  CHECK(nn::kQ8Upgrade == Q8Upgrade::none);  // builds with a dot product of their own, or no SIMD kernel
+  CHECK(ran.empty());
+#endif
+  // And gemv() itself (whichever kernel it runs) equals portable.
+  std::vector<float> w(static_cast<std::size_t>(150) * 868), x(868);
+  for (float& v : w) v = draw(rng, 0);
+  for (float& v : x) v = draw(rng, 0);
+  Packed p(w, 150, 868);
+  AlignedBuffer<float> y0(nn::padded<float>(150)), y1(nn::padded<float>(150));
+  gemv_kernel(Q8Kernel::portable, p.m, x.data(), nullptr, y0.data());
+  nn::gemv(p.m, x.data(), nullptr, y1.data());
+  for (int r = 0; r < 150; ++r) REQUIRE(same_bits(y0[r], y1[r]));
 }
 
 TEST_CASE("int8 kernels: the all-+-127 extreme gives the exact integer sum") {

@@ -18,8 +18,11 @@
 //   neon_dot     vdotq_s32 (ARMv8.2 dot product, s8 x s8, 4 products per int32 lane): 16 per instruction.
 //   neon         vmull_s8 + vmlal_s8 (two exact int16 products summed: at most 32258) + vpadalq_s16.
 //   portable     the same integer arithmetic in plain C++, one row at a time.
-// The build's best kernel (kQ8Kernel) is fixed at compile time from the target macros: no runtime
-// dispatch, no -march=native assumption; a generic build runs the portable kernel.
+// The build's best kernel (kQ8Kernel) is fixed at compile time from the target macros (no
+// -march=native assumption; a generic x86-64 build runs the portable kernel). One run-time upgrade
+// on top: a build whose best kernel has no 8-bit dot product (x86-64-v3 AVX2; ARM64 armv8-a NEON,
+// the NDK's default) runs on CPUs that have one, so gemv() switches to it when the CPU reports it
+// ("Run-time upgrade" below: cpuid / getauxval, read once before main). Same sums, same bits.
 //
 // Accuracy: each weight keeps ~8 bits relative to its row's largest, each input ~8 bits relative
 // to the vector's largest; typical GEMV outputs differ from float by ~1e-3 relative. Measure the
@@ -59,6 +62,24 @@
 #if defined(SPARSEBODY_Q8_NEON)
 #include <arm_neon.h>
 #endif
+// Run-time upgrades (GCC/Clang function target attributes; define SPARSEBODY_NO_RUNTIME_DISPATCH to
+// keep the build's kernel everywhere): an AVX2 build without VNNI on a CPU with AVX-VNNI (Alder
+// Lake+, Zen 5) or AVX-512 VNNI + VL (Ice Lake+, Zen 4); an ARM64 build without the dot product on a
+// Linux/Android CPU with it (Cortex-A55/A75 and later: every Quest-class headset).
+#if !defined(SPARSEBODY_NO_RUNTIME_DISPATCH) && (defined(__GNUC__) || defined(__clang__))
+#if defined(SPARSEBODY_Q8_AVX2) && !defined(SPARSEBODY_Q8_AVXVNNI) && !defined(SPARSEBODY_Q8_AVX512) && defined(__x86_64__)
+#define SPARSEBODY_Q8_RUNTIME_X86 1
+#include <cpuid.h>
+#endif
+// (Clang declares the dot-product intrinsics for target("dotprod") functions from version 17 on;
+// older Clang only under -march=...+dotprod.)
+#if defined(SPARSEBODY_Q8_NEON) && !defined(SPARSEBODY_Q8_NEON_DOT) && defined(__linux__) && \
+    (!defined(__clang__) || __clang_major__ >= 17)
+#define SPARSEBODY_Q8_RUNTIME_ARM 1
+#include <sys/auxv.h>
+#endif
+#endif
+#include <cstdlib>
 
 namespace sparsebody::nn {
 
@@ -503,10 +524,10 @@ inline void q8_panel_batch(const std::int8_t* __restrict w, int groups, const st
 }
 
 // The panels of one quantized input (gemv_q8 after the quantization): full panels of
-// kPanelBatches batches from row `from` on, then the tail batches.
-template <Q8Kernel Kern>
-inline void q8_panels(const PanelMatrix<float, q8>& W, const std::int8_t* q, float sx, const float* bias, float* y,
-                      int from = 0) noexcept {
+// kPanelBatches batches from row `from` on, then the tail batches. Panel::run<NB> does one panel.
+template <class Panel>
+inline void q8_panels_with(const PanelMatrix<float, q8>& W, const std::int8_t* q, float sx, const float* bias, float* y,
+                           int from = 0) noexcept {
   constexpr int L = kLanes<float>;
   constexpr int P = kPanelBatches * L;
   const int prows = padded<float>(W.rows);
@@ -514,24 +535,203 @@ inline void q8_panels(const PanelMatrix<float, q8>& W, const std::int8_t* q, flo
   const std::int8_t* w = W.data + static_cast<std::size_t>(from) * 4 * groups;
   int r0 = from;
   for (; r0 + P <= prows; r0 += P, w += static_cast<std::size_t>(P) * 4 * groups)
-    q8_panel<Kern, kPanelBatches>(w, groups, q, sx, W.row_scale + r0, W.row_sum + r0, bias ? bias + r0 : nullptr, y + r0);
+    Panel::template run<kPanelBatches>(w, groups, q, sx, W.row_scale + r0, W.row_sum + r0, bias ? bias + r0 : nullptr, y + r0);
   const int rest = (prows - r0) / L;
   const float* b = bias ? bias + r0 : nullptr;
   const float* s = W.row_scale + r0;
   const std::int32_t* rs = W.row_sum + r0;
   switch (rest) {  // compile-time batch counts keep the accumulators in registers
     case 0: break;
-    case 1: q8_panel<Kern, 1>(w, groups, q, sx, s, rs, b, y + r0); break;
-    case 2: q8_panel<Kern, 2>(w, groups, q, sx, s, rs, b, y + r0); break;
-    case 3: q8_panel<Kern, 3>(w, groups, q, sx, s, rs, b, y + r0); break;
-    case 4: q8_panel<Kern, 4>(w, groups, q, sx, s, rs, b, y + r0); break;
-    case 5: q8_panel<Kern, 5>(w, groups, q, sx, s, rs, b, y + r0); break;
-    case 6: q8_panel<Kern, 6>(w, groups, q, sx, s, rs, b, y + r0); break;
-    default: q8_panel<Kern, 7>(w, groups, q, sx, s, rs, b, y + r0); break;
+    case 1: Panel::template run<1>(w, groups, q, sx, s, rs, b, y + r0); break;
+    case 2: Panel::template run<2>(w, groups, q, sx, s, rs, b, y + r0); break;
+    case 3: Panel::template run<3>(w, groups, q, sx, s, rs, b, y + r0); break;
+    case 4: Panel::template run<4>(w, groups, q, sx, s, rs, b, y + r0); break;
+    case 5: Panel::template run<5>(w, groups, q, sx, s, rs, b, y + r0); break;
+    case 6: Panel::template run<6>(w, groups, q, sx, s, rs, b, y + r0); break;
+    default: Panel::template run<7>(w, groups, q, sx, s, rs, b, y + r0); break;
+  }
+}
+
+#define SPARSEBODY_Q8_PANEL_ARGS                                                                                  \
+  const std::int8_t *__restrict w, int groups, const std::int8_t *__restrict q, float sx,                        \
+      const float *__restrict scale, const std::int32_t *__restrict sum, const float *__restrict bias,           \
+      float *__restrict y
+template <Q8Kernel Kern>
+struct BuildPanel {  // the build's kernel Kern
+  template <int NB> static void run(SPARSEBODY_Q8_PANEL_ARGS) noexcept { q8_panel<Kern, NB>(w, groups, q, sx, scale, sum, bias, y); }
+};
+template <Q8Kernel Kern>
+inline void q8_panels(const PanelMatrix<float, q8>& W, const std::int8_t* q, float sx, const float* bias, float* y,
+                      int from = 0) noexcept {
+  q8_panels_with<BuildPanel<Kern>>(W, q, sx, bias, y, from);
+}
+
+// ---- Run-time upgrade ----------------------------------------------------------------------------
+// The upgrade kernels repeat q8_panel's dot-product arithmetic (u_j = q_j + 128 against Q, minus
+// 128 R_r; the same accumulator sets and epilogue, so the same bits) in functions compiled for the
+// CPU feature by a target attribute. They are written without lambdas: a lambda's body would not
+// inherit the attribute. They run on the build's layout: 8 rows (x86) or 4 rows (ARM) per vector
+// divide its lane count.
+enum class Q8Upgrade { none, avx_vnni, avx512vl_vnni, neon_dot };
+
+constexpr const char* q8_upgrade_name(Q8Upgrade u) {
+  switch (u) {
+    case Q8Upgrade::avx_vnni: return "AVX-VNNI (run-time upgrade of the AVX2 build)";
+    case Q8Upgrade::avx512vl_vnni: return "AVX-512 VNNI on ymm (run-time upgrade of the AVX2 build)";
+    case Q8Upgrade::neon_dot: return "NEON dot product (run-time upgrade of the armv8-a build)";
+    default: return "none";
+  }
+}
+
+// Whether this CPU runs upgrade u (and this build has it); the environment plays no part.
+inline bool q8_cpu_has(Q8Upgrade u) noexcept {
+#if SPARSEBODY_Q8_RUNTIME_X86
+  unsigned a = 0, b = 0, c = 0, d = 0;
+  if (!__get_cpuid(1, &a, &b, &c, &d) || !(c & (1u << 27))) return false;  // OSXSAVE: xgetbv usable
+  unsigned xlo = 0, xhi = 0;
+  __asm__ volatile("xgetbv" : "=a"(xlo), "=d"(xhi) : "c"(0));
+  if ((xlo & 0x6u) != 0x6u || __get_cpuid_max(0, nullptr) < 7) return false;  // the OS saves ymm
+  if (u == Q8Upgrade::avx_vnni) {
+    __cpuid_count(7, 1, a, b, c, d);
+    return (a >> 4) & 1u;  // CPUID.(7,1):EAX[4] AVX-VNNI
+  }
+  if (u == Q8Upgrade::avx512vl_vnni) {
+    __cpuid_count(7, 0, a, b, c, d);  // EBX[16] AVX512F, EBX[31] AVX512VL, ECX[11] AVX512_VNNI
+    return (b >> 16 & 1u) && (b >> 31 & 1u) && (c >> 11 & 1u) && (xlo & 0xe0u) == 0xe0u;  // + opmask/zmm state
+  }
+#elif SPARSEBODY_Q8_RUNTIME_ARM
+  if (u == Q8Upgrade::neon_dot) return (getauxval(AT_HWCAP) >> 20) & 1ul;  // HWCAP_ASIMDDP
+#endif
+  (void)u;
+  return false;
+}
+
+// The upgrade gemv() takes: the first the CPU has, unless SPARSEBODY_Q8_RUNTIME=off (or 0) is in
+// the environment (to compare with the build's kernel, or to rule the upgrade out).
+inline Q8Upgrade detect_q8_upgrade() noexcept {
+  const char* env = std::getenv("SPARSEBODY_Q8_RUNTIME");
+  if (env && (std::strcmp(env, "off") == 0 || std::strcmp(env, "0") == 0)) return Q8Upgrade::none;
+  for (Q8Upgrade u : {Q8Upgrade::avx_vnni, Q8Upgrade::avx512vl_vnni, Q8Upgrade::neon_dot})
+    if (q8_cpu_has(u)) return u;
+  return Q8Upgrade::none;
+}
+
+#if SPARSEBODY_Q8_RUNTIME_X86
+// 256-bit vpdpbusd: VEX (AVX-VNNI) or EVEX (AVX-512 VNNI + VL), one function per target.
+#define SPARSEBODY_Q8_VNNI256_PANEL(NAME, TARGET, DPBUSD)                                                         \
+  template <int NB>                                                                                               \
+  __attribute__((target(TARGET))) inline void NAME(SPARSEBODY_Q8_PANEL_ARGS) noexcept {                          \
+    constexpr int R = NB * kLanes<float>;                                                                         \
+    constexpr int NV = R / 8;                                                                                     \
+    constexpr int K = 8 / NV > 1 ? 8 / NV : 1;                                                                    \
+    __m256i acc[K][NV];                                                                                           \
+    for (int k = 0; k < K; ++k)                                                                                   \
+      for (int b = 0; b < NV; ++b) acc[k][b] = _mm256_setzero_si256();                                            \
+    int g = 0;                                                                                                    \
+    for (; g + K <= groups; g += K)                                                                               \
+      for (int k = 0; k < K; ++k) {                                                                               \
+        const __m256i ub = _mm256_set1_epi32(q8_group_word(q, g + k) ^ static_cast<std::int32_t>(0x80808080u));   \
+        const std::int8_t* wg = w + static_cast<std::size_t>(g + k) * R * 4;                                       \
+        for (int b = 0; b < NV; ++b)                                                                              \
+          acc[k][b] = DPBUSD(acc[k][b], ub, _mm256_load_si256(reinterpret_cast<const __m256i*>(wg + b * 32)));    \
+      }                                                                                                           \
+    for (; g < groups; ++g) {                                                                                     \
+      const __m256i ub = _mm256_set1_epi32(q8_group_word(q, g) ^ static_cast<std::int32_t>(0x80808080u));         \
+      const std::int8_t* wg = w + static_cast<std::size_t>(g) * R * 4;                                             \
+      for (int b = 0; b < NV; ++b)                                                                                \
+        acc[0][b] = DPBUSD(acc[0][b], ub, _mm256_load_si256(reinterpret_cast<const __m256i*>(wg + b * 32)));      \
+    }                                                                                                             \
+    const __m256 vsx = _mm256_set1_ps(sx);                                                                        \
+    for (int b = 0; b < NV; ++b) {                                                                                \
+      __m256i s = acc[0][b];                                                                                      \
+      for (int k = 1; k < K; ++k) s = _mm256_add_epi32(s, acc[k][b]);                                             \
+      s = _mm256_sub_epi32(s, _mm256_slli_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(sum + b * 8)), 7)); \
+      const __m256 f = _mm256_mul_ps(_mm256_loadu_ps(scale + b * 8), vsx);                                        \
+      const __m256 bb = bias ? _mm256_loadu_ps(bias + b * 8) : _mm256_setzero_ps();                               \
+      _mm256_storeu_ps(y + b * 8, _mm256_fmadd_ps(_mm256_cvtepi32_ps(s), f, bb));                                 \
+    }                                                                                                             \
+  }
+SPARSEBODY_Q8_VNNI256_PANEL(q8_panel_avx_vnni_rt, "avx2,fma,avxvnni", _mm256_dpbusd_avx_epi32)
+SPARSEBODY_Q8_VNNI256_PANEL(q8_panel_avx512vl_vnni_rt, "avx2,fma,avx512f,avx512vl,avx512vnni", _mm256_dpbusd_epi32)
+#undef SPARSEBODY_Q8_VNNI256_PANEL
+struct AvxVnniPanel {
+  template <int NB> static void run(SPARSEBODY_Q8_PANEL_ARGS) noexcept { q8_panel_avx_vnni_rt<NB>(w, groups, q, sx, scale, sum, bias, y); }
+};
+struct Avx512VlVnniPanel {
+  template <int NB> static void run(SPARSEBODY_Q8_PANEL_ARGS) noexcept { q8_panel_avx512vl_vnni_rt<NB>(w, groups, q, sx, scale, sum, bias, y); }
+};
+#endif
+
+#if SPARSEBODY_Q8_RUNTIME_ARM
+// vdotq_s32 (s8 x s8): q8_panel's neon_dot arithmetic. GCC's arm_neon.h declares it for
+// armv8.2-a+dotprod, Clang's for the "dotprod" feature.
+#if defined(__clang__)
+#define SPARSEBODY_Q8_DOTPROD_TARGET "dotprod"
+#else
+#define SPARSEBODY_Q8_DOTPROD_TARGET "arch=armv8.2-a+dotprod"
+#endif
+template <int NB>
+__attribute__((target(SPARSEBODY_Q8_DOTPROD_TARGET))) inline void q8_panel_neon_dot_rt(SPARSEBODY_Q8_PANEL_ARGS) noexcept {
+  constexpr int R = NB * kLanes<float>;
+  constexpr int NV = R / 4;
+  constexpr int K = 8 / NV > 1 ? 8 / NV : 1;
+  (void)sum;
+  int32x4_t acc[K][NV];
+  for (int k = 0; k < K; ++k)
+    for (int b = 0; b < NV; ++b) acc[k][b] = vdupq_n_s32(0);
+  int g = 0;
+  for (; g + K <= groups; g += K)
+    for (int k = 0; k < K; ++k) {
+      const int8x16_t qb = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(q, g + k)));
+      const std::int8_t* wg = w + static_cast<std::size_t>(g + k) * R * 4;
+      for (int b = 0; b < NV; ++b) acc[k][b] = vdotq_s32(acc[k][b], vld1q_s8(wg + b * 16), qb);
+    }
+  for (; g < groups; ++g) {
+    const int8x16_t qb = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(q, g)));
+    const std::int8_t* wg = w + static_cast<std::size_t>(g) * R * 4;
+    for (int b = 0; b < NV; ++b) acc[0][b] = vdotq_s32(acc[0][b], vld1q_s8(wg + b * 16), qb);
+  }
+  const float32x4_t vsx = vdupq_n_f32(sx);
+  for (int b = 0; b < NV; ++b) {
+    int32x4_t s = acc[0][b];
+    for (int k = 1; k < K; ++k) s = vaddq_s32(s, acc[k][b]);
+    const float32x4_t f = vmulq_f32(vld1q_f32(scale + b * 4), vsx);
+    const float32x4_t bb = bias ? vld1q_f32(bias + b * 4) : vdupq_n_f32(0.f);
+    vst1q_f32(y + b * 4, vfmaq_f32(bb, vcvtq_f32_s32(s), f));
+  }
+}
+#undef SPARSEBODY_Q8_DOTPROD_TARGET
+struct NeonDotPanel {
+  template <int NB> static void run(SPARSEBODY_Q8_PANEL_ARGS) noexcept { q8_panel_neon_dot_rt<NB>(w, groups, q, sx, scale, sum, bias, y); }
+};
+#endif
+#undef SPARSEBODY_Q8_PANEL_ARGS
+
+// The panels of one quantized input with upgrade u (q8_panels with BuildPanel<kQ8Kernel> for none
+// or one this build lacks).
+inline void q8_panels_upgrade(Q8Upgrade u, const PanelMatrix<float, q8>& W, const std::int8_t* q, float sx,
+                              const float* bias, float* y) noexcept {
+  switch (u) {
+#if SPARSEBODY_Q8_RUNTIME_X86
+    case Q8Upgrade::avx_vnni: q8_panels_with<AvxVnniPanel>(W, q, sx, bias, y); return;
+    case Q8Upgrade::avx512vl_vnni: q8_panels_with<Avx512VlVnniPanel>(W, q, sx, bias, y); return;
+#endif
+#if SPARSEBODY_Q8_RUNTIME_ARM
+    case Q8Upgrade::neon_dot: q8_panels_with<NeonDotPanel>(W, q, sx, bias, y); return;
+#endif
+    default: q8_panels<kQ8Kernel>(W, q, sx, bias, y); return;
   }
 }
 
 }  // namespace detail
+
+// The upgrade this process runs (decided once, before main: a plain load at step time).
+inline const detail::Q8Upgrade kQ8Upgrade = detail::detect_q8_upgrade();
+
+// What gemv() on q8 weights runs in this process: the upgrade's name, else the build's kernel's.
+inline const char* q8_kernel_in_use() noexcept {
+  return kQ8Upgrade != detail::Q8Upgrade::none ? detail::q8_upgrade_name(kQ8Upgrade) : q8_kernel_name(kQ8Kernel);
+}
 
 // y[0 .. padded(rows)) = W x + bias with int8 weights, using kernel Kern (see top; default: the
 // build's best). A non-finite x gives NaN outputs (so guarded steps see it), an all-zero x the bias.
@@ -547,7 +747,28 @@ inline void gemv_q8(const PanelMatrix<float, q8>& W, const float* x, const float
   detail::q8_panels<Kern>(W, q, sx, bias, y);
 }
 
+// y = W x + bias with upgrade u's kernel (detail::q8_cpu_has(u) must hold; none: the build's kernel).
+inline void gemv_q8_upgrade(detail::Q8Upgrade u, const PanelMatrix<float, q8>& W, const float* x, const float* bias,
+                            float* y) noexcept {
+  alignas(64) std::int8_t q[kQ8MaxCols + 4];
+  const float sx = detail::quantize_input_q8<kQ8Kernel != Q8Kernel::portable>(x, W.cols, q);
+  const int prows = padded<float>(W.rows);
+  if (!(sx > 0.0f)) {  // as gemv_q8
+    for (int r = 0; r < prows; ++r) y[r] = sx == 0.0f ? (bias ? bias[r] : 0.0f) : NAN;
+    return;
+  }
+  detail::q8_panels_upgrade(u, W, q, sx, bias, y);
+}
+
+// The product every network runs: the CPU's upgrade where it has one (kQ8Upgrade), else the build's
+// kernel. The branch is taken the same way every call.
 inline void gemv(const PanelMatrix<float, q8>& W, const float* x, const float* bias, float* y) noexcept {
+#if SPARSEBODY_Q8_RUNTIME_X86 || SPARSEBODY_Q8_RUNTIME_ARM
+  if (kQ8Upgrade != detail::Q8Upgrade::none) {
+    gemv_q8_upgrade(kQ8Upgrade, W, x, bias, y);
+    return;
+  }
+#endif
   gemv_q8<kQ8Kernel>(W, x, bias, y);
 }
 
@@ -606,6 +827,12 @@ inline void gemv_batch_q8(const PanelMatrix<float, q8>& W, int n, const float* c
 
 inline void gemv_batch(const PanelMatrix<float, q8>& W, int n, const float* const* x, const float* bias,
                        float* const* y) noexcept {
+#if SPARSEBODY_Q8_RUNTIME_X86 || SPARSEBODY_Q8_RUNTIME_ARM
+  if (kQ8Upgrade != detail::Q8Upgrade::none) {  // one product per instance (as the build's AVX2 / NEON kernels)
+    for (int i = 0; i < n; ++i) gemv_q8_upgrade(kQ8Upgrade, W, x[i], bias, y[i]);
+    return;
+  }
+#endif
   gemv_batch_q8<kQ8Kernel>(W, n, x, bias, y);
 }
 
