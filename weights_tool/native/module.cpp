@@ -684,6 +684,8 @@ PYBIND11_MODULE(sparsebody, m) {
     const auto c = nn::fastest_storage();
     return py::make_tuple(nn::storage_name(c.storage), c.reason);
   });
+  m.def("q8_kernel_in_use", [] { return std::string(nn::q8_kernel_in_use()); },
+        "The int8 kernel q8 weights run in this process: the build's, or the CPU's run-time upgrade.");
   m.def("default_weights", &default_weights, py::arg("model"));
   m.attr("TRACKERS") = py::make_tuple("head", "left_hand", "right_hand", "pelvis");
 }

@@ -453,3 +453,13 @@ def test_foot_pin(sb):
     assert not np.array_equal(toe.out["position"], ankle.out["position"])
     with pytest.raises(ValueError, match="foot_pin must be ankle or toe, got 'heel'"):
         sb.create("n3p", foot_pin="heel")
+
+
+def test_storage_auto_and_the_int8_kernel_in_use_are_named(sb):
+    # storage auto's choice with its reason, and the int8 kernel q8 weights run here: the build's
+    # own or the CPU's run-time upgrade (nn/int8.hpp), never an empty or unknown name.
+    storage, reason = sb.fastest_storage()
+    assert storage in ("float", "f16", "q8") and reason
+    kernel = sb.q8_kernel_in_use()
+    known = ("AVX-512 VNNI", "AVX-VNNI", "AVX2", "NEON dot product", "NEON", "portable")
+    assert kernel.startswith(known), kernel

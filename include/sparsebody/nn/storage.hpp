@@ -1,5 +1,7 @@
 // "storage auto": which weight storage (float, f16, q8) runs a float network fastest in this build,
-// decided at compile time from the target ISA (no -march=native assumption, no runtime probing).
+// decided at compile time from the target ISA (no -march=native assumption). The q8 kernel itself
+// may be upgraded at run time to a dot product the CPU has (nn/int8.hpp, q8_kernel_in_use()); that
+// only makes q8 faster, so the choice stands.
 //
 // Rule (README "Network benchmarks", bench/bench_networks.cpp, measured per build target):
 //  1. q8 where the build has a SIMD int8 kernel (nn::kQ8Kernel: AVX-512 VNNI, AVX-VNNI, AVX2,
@@ -39,9 +41,9 @@ constexpr StorageChoice fastest_storage(std::size_t float_weight_bytes = 0) noex
   switch (kQ8Kernel) {
     case Q8Kernel::avx512_vnni: return {Storage::q8, "AVX-512 VNNI int8 kernel: 2.2-5.3x float in bench_networks, Zen 5"};
     case Q8Kernel::avx_vnni: return {Storage::q8, "AVX-VNNI int8 kernel: 1.9-5.0x float in bench_networks, Zen 5"};
-    case Q8Kernel::avx2: return {Storage::q8, "AVX2 int8 kernel: 1.6-3.6x float in bench_networks, Zen 5"};
+    case Q8Kernel::avx2: return {Storage::q8, "AVX2 int8 kernel (upgraded to VNNI at run time where the CPU has it): 1.6-3.6x float in bench_networks, Zen 5; 1.9-4.3x with the upgrade, Intel Xeon"};
     case Q8Kernel::neon_dot: return {Storage::q8, "NEON dot-product int8 kernel: 16 multiply-adds per instruction, a quarter of the bytes"};
-    case Q8Kernel::neon: return {Storage::q8, "NEON int8 kernel (no dot product): a quarter of the bytes; not timed on hardware"};
+    case Q8Kernel::neon: return {Storage::q8, "NEON int8 kernel (upgraded to the dot product at run time where the CPU has it): a quarter of the bytes; not timed on hardware"};
     default: break;
   }
   if (kF16Hardware && float_weight_bytes > kF16MinFloatBytes)
