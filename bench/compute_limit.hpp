@@ -44,8 +44,9 @@ inline std::int64_t fma_f32_block(std::int64_t blocks) {
 }
 
 // The run-time upgrades' sequences (nn/int8.hpp "Run-time upgrade"): one 256-bit vpdpbusd per 32
-// products (VEX or EVEX form), one sdot per 16; compiled for the feature, run only where the CPU has it.
-#if SPARSEBODY_Q8_RUNTIME_X86
+// products (VEX or EVEX form; the VEX one is also the -mavxvnni build's), one sdot per 16; compiled for
+// the feature, run only where the CPU has it.
+#if SPARSEBODY_Q8_AVX2 && (defined(__GNUC__) || defined(__clang__))
 #define SPARSEBODY_BENCH_DPBUSD256(NAME, TARGET, DPBUSD)                                           \
   __attribute__((target(TARGET))) inline std::int64_t NAME(std::int64_t blocks) {                 \
     __m256i acc[kChains];                                                                         \
@@ -107,17 +108,7 @@ inline std::int64_t dot_i8_block(std::int64_t blocks) {
   }
 #endif
 #if SPARSEBODY_Q8_AVXVNNI && defined(__AVXVNNI__)
-  if constexpr (sparsebody::nn::kQ8Kernel == sparsebody::nn::Q8Kernel::avx_vnni) {
-    __m256i acc[kChains];
-    for (int k = 0; k < kChains; ++k) acc[k] = _mm256_set1_epi32(k);
-    __m256i a = _mm256_set1_epi8(3), b = _mm256_set1_epi8(-5);
-    benchmark::DoNotOptimize(a);
-    benchmark::DoNotOptimize(b);
-    for (std::int64_t i = 0; i < blocks; ++i)
-      for (int k = 0; k < kChains; ++k) acc[k] = _mm256_dpbusd_avx_epi32(acc[k], a, b);
-    for (int k = 0; k < kChains; ++k) benchmark::DoNotOptimize(acc[k]);
-    return blocks * kChains * 32;
-  }
+  if constexpr (sparsebody::nn::kQ8Kernel == sparsebody::nn::Q8Kernel::avx_vnni) return dot_i8_avx_vnni_rt(blocks);
 #endif
 #if SPARSEBODY_Q8_AVX2 && defined(__AVX2__)
   if constexpr (sparsebody::nn::kQ8Kernel == sparsebody::nn::Q8Kernel::avx2) {
