@@ -28,9 +28,9 @@
 #include <string>
 #include <vector>
 
-#include "sparsebody/core/one_copy.hpp"
 #include "sparsebody/avatar/lobstr_upper_body.hpp"
 #include "sparsebody/avatar/pipeline_front_end.hpp"
+#include "sparsebody/core/one_copy.hpp"
 #include "sparsebody/features/auto_calibration.hpp"
 #include "sparsebody/features/calibration.hpp"
 #include "sparsebody/features/device_model.hpp"

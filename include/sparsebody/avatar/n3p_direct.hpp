@@ -45,8 +45,8 @@
 #include <limits>
 #include <string>
 
-#include "sparsebody/core/one_copy.hpp"
 #include "sparsebody/avatar/pipeline_front_end.hpp"
+#include "sparsebody/core/one_copy.hpp"
 #include "sparsebody/features/auto_calibration.hpp"
 #include "sparsebody/features/device_model.hpp"
 #include "sparsebody/features/n3p_calibration.hpp"

@@ -27,8 +27,8 @@
 #include <string>
 #include <vector>
 
-#include "sparsebody/core/one_copy.hpp"
 #include "sparsebody/core/error.hpp"
+#include "sparsebody/core/one_copy.hpp"
 #include "sparsebody/features/heading_frame.hpp"
 #include "sparsebody/features/n3p_state.hpp"
 #include "sparsebody/features/n3p_tracker_input.hpp"
