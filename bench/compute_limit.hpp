@@ -44,8 +44,8 @@ inline std::int64_t fma_f32_block(std::int64_t blocks) {
 }
 
 // The run-time upgrades' sequences (nn/int8.hpp "Run-time upgrade"): one 256-bit vpdpbusd per 32
-// products (VEX or EVEX form; the VEX one is also the -mavxvnni build's), one sdot per 16; compiled for
-// the feature, run only where the CPU has it.
+// products (VEX or EVEX form; the VEX one is also the -mavxvnni build's), one sdot per 16 (also the
+// +dotprod build's); compiled for the feature, run only where the CPU has it.
 #if SPARSEBODY_Q8_AVX2 && (defined(__GNUC__) || defined(__clang__))
 #define SPARSEBODY_BENCH_DPBUSD256(NAME, TARGET, DPBUSD)                                           \
   __attribute__((target(TARGET))) inline std::int64_t NAME(std::int64_t blocks) {                 \
@@ -63,7 +63,7 @@ SPARSEBODY_BENCH_DPBUSD256(dot_i8_avx_vnni_rt, "avx2,avxvnni", _mm256_dpbusd_avx
 SPARSEBODY_BENCH_DPBUSD256(dot_i8_avx512vl_vnni_rt, "avx2,avx512f,avx512vl,avx512vnni", _mm256_dpbusd_epi32)
 #undef SPARSEBODY_BENCH_DPBUSD256
 #endif
-#if SPARSEBODY_Q8_RUNTIME_ARM
+#if SPARSEBODY_Q8_NEON_DOT || SPARSEBODY_Q8_RUNTIME_ARM
 #if defined(__clang__)
 __attribute__((target("dotprod")))
 #else
@@ -130,17 +130,7 @@ inline std::int64_t dot_i8_block(std::int64_t blocks) {
   }
 #endif
 #if SPARSEBODY_Q8_NEON_DOT && defined(__ARM_FEATURE_DOTPROD)
-  if constexpr (sparsebody::nn::kQ8Kernel == sparsebody::nn::Q8Kernel::neon_dot) {
-    int32x4_t acc[kChains];
-    for (int k = 0; k < kChains; ++k) acc[k] = vdupq_n_s32(k);
-    int8x16_t a = vdupq_n_s8(3), b = vdupq_n_s8(-5);
-    benchmark::DoNotOptimize(a);
-    benchmark::DoNotOptimize(b);
-    for (std::int64_t i = 0; i < blocks; ++i)
-      for (int k = 0; k < kChains; ++k) acc[k] = vdotq_s32(acc[k], a, b);
-    for (int k = 0; k < kChains; ++k) benchmark::DoNotOptimize(acc[k]);
-    return blocks * kChains * 16;
-  }
+  if constexpr (sparsebody::nn::kQ8Kernel == sparsebody::nn::Q8Kernel::neon_dot) return dot_i8_neon_dot_rt(blocks);
 #endif
 #if SPARSEBODY_Q8_NEON && defined(__ARM_NEON)
   if constexpr (sparsebody::nn::kQ8Kernel == sparsebody::nn::Q8Kernel::neon) {

@@ -284,6 +284,104 @@ inline std::int32_t q8_group_word(const std::int8_t* q, int g) noexcept {
   return v;
 }
 
+// The dot-product panel kernels (u8 x s8 vpdpbusd on ymm, s8 x s8 sdot): each a function compiled for
+// its feature by a target attribute, so that the build whose target has it (q8_panel) and a build
+// that only finds it at run time ("Run-time upgrade" below) run the same code. No lambdas inside: a
+// lambda's body would not inherit the attribute. They compute q8_panel's arithmetic (u_j = q_j + 128
+// against Q, minus 128 R_r for vpdpbusd; the accumulator sets and the epilogue of the other kernels),
+// so the same bits, on the build's layout (8 rows (x86) or 4 (ARM) per vector divide its lanes).
+#if defined(__GNUC__) || defined(__clang__)
+#define SPARSEBODY_Q8_TARGET(T) __attribute__((target(T)))
+#else
+#define SPARSEBODY_Q8_TARGET(T)
+#endif
+#define SPARSEBODY_Q8_PANEL_ARGS                                                                                  \
+  const std::int8_t *__restrict w, int groups, const std::int8_t *__restrict q, float sx,                        \
+      const float *__restrict scale, const std::int32_t *__restrict sum, const float *__restrict bias,           \
+      float *__restrict y
+#if SPARSEBODY_Q8_AVXVNNI || SPARSEBODY_Q8_RUNTIME_X86
+// 256-bit vpdpbusd: VEX (AVX-VNNI: the -mavxvnni build's kernel and the upgrade) or EVEX (AVX-512
+// VNNI + VL: the upgrade only), one function per target.
+#define SPARSEBODY_Q8_VNNI256_PANEL(NAME, TARGET, DPBUSD)                                                         \
+  template <int NB>                                                                                               \
+  SPARSEBODY_Q8_TARGET(TARGET) inline void NAME(SPARSEBODY_Q8_PANEL_ARGS) noexcept {                          \
+    constexpr int R = NB * kLanes<float>;                                                                         \
+    constexpr int NV = R / 8;                                                                                     \
+    constexpr int K = 8 / NV > 1 ? 8 / NV : 1;                                                                    \
+    __m256i acc[K][NV];                                                                                           \
+    for (int k = 0; k < K; ++k)                                                                                   \
+      for (int b = 0; b < NV; ++b) acc[k][b] = _mm256_setzero_si256();                                            \
+    int g = 0;                                                                                                    \
+    for (; g + K <= groups; g += K)                                                                               \
+      for (int k = 0; k < K; ++k) {                                                                               \
+        const __m256i ub = _mm256_set1_epi32(q8_group_word(q, g + k) ^ static_cast<std::int32_t>(0x80808080u));   \
+        const std::int8_t* wg = w + static_cast<std::size_t>(g + k) * R * 4;                                       \
+        for (int b = 0; b < NV; ++b)                                                                              \
+          acc[k][b] = DPBUSD(acc[k][b], ub, _mm256_load_si256(reinterpret_cast<const __m256i*>(wg + b * 32)));    \
+      }                                                                                                           \
+    for (; g < groups; ++g) {                                                                                     \
+      const __m256i ub = _mm256_set1_epi32(q8_group_word(q, g) ^ static_cast<std::int32_t>(0x80808080u));         \
+      const std::int8_t* wg = w + static_cast<std::size_t>(g) * R * 4;                                             \
+      for (int b = 0; b < NV; ++b)                                                                                \
+        acc[0][b] = DPBUSD(acc[0][b], ub, _mm256_load_si256(reinterpret_cast<const __m256i*>(wg + b * 32)));      \
+    }                                                                                                             \
+    const __m256 vsx = _mm256_set1_ps(sx);                                                                        \
+    for (int b = 0; b < NV; ++b) {                                                                                \
+      __m256i s = acc[0][b];                                                                                      \
+      for (int k = 1; k < K; ++k) s = _mm256_add_epi32(s, acc[k][b]);                                             \
+      s = _mm256_sub_epi32(s, _mm256_slli_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(sum + b * 8)), 7)); \
+      const __m256 f = _mm256_mul_ps(_mm256_loadu_ps(scale + b * 8), vsx);                                        \
+      const __m256 bb = bias ? _mm256_loadu_ps(bias + b * 8) : _mm256_setzero_ps();                               \
+      _mm256_storeu_ps(y + b * 8, _mm256_fmadd_ps(_mm256_cvtepi32_ps(s), f, bb));                                 \
+    }                                                                                                             \
+  }
+SPARSEBODY_Q8_VNNI256_PANEL(q8_panel_vnni256_vex, "avx2,fma,avxvnni", _mm256_dpbusd_avx_epi32)
+#if SPARSEBODY_Q8_RUNTIME_X86
+SPARSEBODY_Q8_VNNI256_PANEL(q8_panel_vnni256_evex, "avx2,fma,avx512f,avx512vl,avx512vnni", _mm256_dpbusd_epi32)
+#endif
+#undef SPARSEBODY_Q8_VNNI256_PANEL
+#endif
+#if SPARSEBODY_Q8_NEON_DOT || SPARSEBODY_Q8_RUNTIME_ARM
+// vdotq_s32 (s8 x s8): the armv8.2-a+dotprod build's kernel and the upgrade. GCC's arm_neon.h declares it for
+// armv8.2-a+dotprod, Clang's for the "dotprod" feature.
+#if defined(__clang__)
+#define SPARSEBODY_Q8_DOTPROD_TARGET "dotprod"
+#else
+#define SPARSEBODY_Q8_DOTPROD_TARGET "arch=armv8.2-a+dotprod"
+#endif
+template <int NB>
+SPARSEBODY_Q8_TARGET(SPARSEBODY_Q8_DOTPROD_TARGET) inline void q8_panel_sdot(SPARSEBODY_Q8_PANEL_ARGS) noexcept {
+  constexpr int R = NB * kLanes<float>;
+  constexpr int NV = R / 4;
+  constexpr int K = 8 / NV > 1 ? 8 / NV : 1;
+  (void)sum;
+  int32x4_t acc[K][NV];
+  for (int k = 0; k < K; ++k)
+    for (int b = 0; b < NV; ++b) acc[k][b] = vdupq_n_s32(0);
+  int g = 0;
+  for (; g + K <= groups; g += K)
+    for (int k = 0; k < K; ++k) {
+      const int8x16_t qb = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(q, g + k)));
+      const std::int8_t* wg = w + static_cast<std::size_t>(g + k) * R * 4;
+      for (int b = 0; b < NV; ++b) acc[k][b] = vdotq_s32(acc[k][b], vld1q_s8(wg + b * 16), qb);
+    }
+  for (; g < groups; ++g) {
+    const int8x16_t qb = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(q, g)));
+    const std::int8_t* wg = w + static_cast<std::size_t>(g) * R * 4;
+    for (int b = 0; b < NV; ++b) acc[0][b] = vdotq_s32(acc[0][b], vld1q_s8(wg + b * 16), qb);
+  }
+  const float32x4_t vsx = vdupq_n_f32(sx);
+  for (int b = 0; b < NV; ++b) {
+    int32x4_t s = acc[0][b];
+    for (int k = 1; k < K; ++k) s = vaddq_s32(s, acc[k][b]);
+    const float32x4_t f = vmulq_f32(vld1q_f32(scale + b * 4), vsx);
+    const float32x4_t bb = bias ? vld1q_f32(bias + b * 4) : vdupq_n_f32(0.f);
+    vst1q_f32(y + b * 4, vfmaq_f32(bb, vcvtq_f32_s32(s), f));
+  }
+}
+#undef SPARSEBODY_Q8_DOTPROD_TARGET
+#endif
+
 // One panel of R = NB * L rows with kernel K: S_r (exact int32), then y_r = fma(S_r, s_r s_x, b_r).
 // w advances NB * L * 4 bytes per column group. Multi-chain kernels split the groups over K
 // accumulator sets (a latency of 3-5 cycles per multiply-add instruction needs >= 8 in flight).
@@ -323,27 +421,25 @@ inline void q8_panel(const std::int8_t* __restrict w, int groups, const std::int
     return;
   }
 #endif
+#if SPARSEBODY_Q8_AVXVNNI
+  if constexpr (Kern == Q8Kernel::avx_vnni) {
+    q8_panel_vnni256_vex<NB>(w, groups, q, sx, scale, sum, bias, y);
+    return;
+  }
+#endif
 #if SPARSEBODY_Q8_AVX2
-  if constexpr (Kern == Q8Kernel::avx2 || Kern == Q8Kernel::avx_vnni) {
+  if constexpr (Kern == Q8Kernel::avx2) {
     __m256i acc[K][NV];
     for (int k = 0; k < K; ++k)
       for (int b = 0; b < NV; ++b) acc[k][b] = _mm256_setzero_si256();
-    [[maybe_unused]] const __m256i ones = _mm256_set1_epi16(1);
+    const __m256i ones = _mm256_set1_epi16(1);
     auto step = [&](int k, int g) {
       const std::int8_t* wg = w + static_cast<std::size_t>(g) * R * 4;
-      if constexpr (Kern == Q8Kernel::avx_vnni) {
-#if SPARSEBODY_Q8_AVXVNNI
-        const __m256i ub = _mm256_set1_epi32(q8_group_word(q, g) ^ static_cast<std::int32_t>(0x80808080u));
-        for (int b = 0; b < NV; ++b)
-          acc[k][b] = _mm256_dpbusd_avx_epi32(acc[k][b], ub, _mm256_load_si256(reinterpret_cast<const __m256i*>(wg + b * 32)));
-#endif
-      } else {
-        const __m256i qb = _mm256_set1_epi32(q8_group_word(q, g));
-        const __m256i qa = _mm256_abs_epi8(qb);  // |q| as unsigned bytes (<= 127)
-        for (int b = 0; b < NV; ++b) {
-          const __m256i ws = _mm256_sign_epi8(_mm256_load_si256(reinterpret_cast<const __m256i*>(wg + b * 32)), qb);
-          acc[k][b] = _mm256_add_epi32(acc[k][b], _mm256_madd_epi16(_mm256_maddubs_epi16(qa, ws), ones));
-        }
+      const __m256i qb = _mm256_set1_epi32(q8_group_word(q, g));
+      const __m256i qa = _mm256_abs_epi8(qb);  // |q| as unsigned bytes (<= 127)
+      for (int b = 0; b < NV; ++b) {
+        const __m256i ws = _mm256_sign_epi8(_mm256_load_si256(reinterpret_cast<const __m256i*>(wg + b * 32)), qb);
+        acc[k][b] = _mm256_add_epi32(acc[k][b], _mm256_madd_epi16(_mm256_maddubs_epi16(qa, ws), ones));
       }
     };
     int g = 0;
@@ -354,8 +450,6 @@ inline void q8_panel(const std::int8_t* __restrict w, int groups, const std::int
     for (int b = 0; b < NV; ++b) {
       __m256i s = acc[0][b];
       for (int k = 1; k < K; ++k) s = _mm256_add_epi32(s, acc[k][b]);
-      if constexpr (Kern == Q8Kernel::avx_vnni)
-        s = _mm256_sub_epi32(s, _mm256_slli_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(sum + b * 8)), 7));
       const __m256 f = _mm256_mul_ps(_mm256_loadu_ps(scale + b * 8), vsx);
       const __m256 bb = bias ? _mm256_loadu_ps(bias + b * 8) : _mm256_setzero_ps();
       _mm256_storeu_ps(y + b * 8, _mm256_fmadd_ps(_mm256_cvtepi32_ps(s), f, bb));
@@ -363,56 +457,41 @@ inline void q8_panel(const std::int8_t* __restrict w, int groups, const std::int
     return;
   }
 #endif
-#if SPARSEBODY_Q8_NEON
-  if constexpr (Kern == Q8Kernel::neon_dot || Kern == Q8Kernel::neon) {
-    int32x4_t sums[NV];
-    if constexpr (Kern == Q8Kernel::neon_dot) {
 #if SPARSEBODY_Q8_NEON_DOT
-      int32x4_t acc[K][NV];
-      for (int k = 0; k < K; ++k)
-        for (int b = 0; b < NV; ++b) acc[k][b] = vdupq_n_s32(0);
-      auto step = [&](int k, int g) {
-        const int8x16_t qb = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(q, g)));
-        const std::int8_t* wg = w + static_cast<std::size_t>(g) * R * 4;
-        for (int b = 0; b < NV; ++b) acc[k][b] = vdotq_s32(acc[k][b], vld1q_s8(wg + b * 16), qb);
-      };
-      int g = 0;
-      for (; g + K <= groups; g += K)
-        for (int k = 0; k < K; ++k) step(k, g + k);
-      for (; g < groups; ++g) step(0, g);
-      for (int b = 0; b < NV; ++b) {
-        sums[b] = acc[0][b];
-        for (int k = 1; k < K; ++k) sums[b] = vaddq_s32(sums[b], acc[k][b]);
-      }
+  if constexpr (Kern == Q8Kernel::neon_dot) {
+    q8_panel_sdot<NB>(w, groups, q, sx, scale, sum, bias, y);
+    return;
+  }
 #endif
-    } else {
-      // Per vector (rows 0-3 x 4 columns), lo/hi: rows 0-1 / 2-3, each int32 lane half a row;
-      // two groups' int16 products are summed before widening (|sum| <= 2 * 127 * 127).
-      int32x4_t lo[NV], hi[NV];
-      for (int b = 0; b < NV; ++b) lo[b] = hi[b] = vdupq_n_s32(0);
-      int g = 0;
-      for (; g + 2 <= groups; g += 2) {
-        const int8x16_t q0 = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(q, g)));
-        const int8x16_t q1 = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(q, g + 1)));
-        const std::int8_t* w0 = w + static_cast<std::size_t>(g) * R * 4;
-        const std::int8_t* w1 = w0 + R * 4;
-        for (int b = 0; b < NV; ++b) {
-          const int8x16_t a = vld1q_s8(w0 + b * 16), c = vld1q_s8(w1 + b * 16);
-          lo[b] = vpadalq_s16(lo[b], vmlal_s8(vmull_s8(vget_low_s8(a), vget_low_s8(q0)), vget_low_s8(c), vget_low_s8(q1)));
-          hi[b] = vpadalq_s16(hi[b], vmlal_high_s8(vmull_high_s8(a, q0), c, q1));
-        }
+#if SPARSEBODY_Q8_NEON
+  if constexpr (Kern == Q8Kernel::neon) {
+    // Per vector (rows 0-3 x 4 columns), lo/hi: rows 0-1 / 2-3, each int32 lane half a row;
+    // two groups' int16 products are summed before widening (|sum| <= 2 * 127 * 127).
+    int32x4_t lo[NV], hi[NV];
+    for (int b = 0; b < NV; ++b) lo[b] = hi[b] = vdupq_n_s32(0);
+    int g = 0;
+    for (; g + 2 <= groups; g += 2) {
+      const int8x16_t q0 = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(q, g)));
+      const int8x16_t q1 = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(q, g + 1)));
+      const std::int8_t* w0 = w + static_cast<std::size_t>(g) * R * 4;
+      const std::int8_t* w1 = w0 + R * 4;
+      for (int b = 0; b < NV; ++b) {
+        const int8x16_t a = vld1q_s8(w0 + b * 16), c = vld1q_s8(w1 + b * 16);
+        lo[b] = vpadalq_s16(lo[b], vmlal_s8(vmull_s8(vget_low_s8(a), vget_low_s8(q0)), vget_low_s8(c), vget_low_s8(q1)));
+        hi[b] = vpadalq_s16(hi[b], vmlal_high_s8(vmull_high_s8(a, q0), c, q1));
       }
-      for (; g < groups; ++g) {
-        const int8x16_t q0 = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(q, g)));
-        const std::int8_t* w0 = w + static_cast<std::size_t>(g) * R * 4;
-        for (int b = 0; b < NV; ++b) {
-          const int8x16_t a = vld1q_s8(w0 + b * 16);
-          lo[b] = vpadalq_s16(lo[b], vmull_s8(vget_low_s8(a), vget_low_s8(q0)));
-          hi[b] = vpadalq_s16(hi[b], vmull_high_s8(a, q0));
-        }
-      }
-      for (int b = 0; b < NV; ++b) sums[b] = vpaddq_s32(lo[b], hi[b]);  // [r0, r1, r2, r3]
     }
+    for (; g < groups; ++g) {
+      const int8x16_t q0 = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(q, g)));
+      const std::int8_t* w0 = w + static_cast<std::size_t>(g) * R * 4;
+      for (int b = 0; b < NV; ++b) {
+        const int8x16_t a = vld1q_s8(w0 + b * 16);
+        lo[b] = vpadalq_s16(lo[b], vmull_s8(vget_low_s8(a), vget_low_s8(q0)));
+        hi[b] = vpadalq_s16(hi[b], vmull_high_s8(a, q0));
+      }
+    }
+    int32x4_t sums[NV];
+    for (int b = 0; b < NV; ++b) sums[b] = vpaddq_s32(lo[b], hi[b]);  // [r0, r1, r2, r3]
     const float32x4_t vsx = vdupq_n_f32(sx);
     for (int b = 0; b < NV; ++b) {
       const float32x4_t f = vmulq_f32(vld1q_f32(scale + b * 4), vsx);
@@ -552,10 +631,6 @@ inline void q8_panels_with(const PanelMatrix<float, q8>& W, const std::int8_t* q
   }
 }
 
-#define SPARSEBODY_Q8_PANEL_ARGS                                                                                  \
-  const std::int8_t *__restrict w, int groups, const std::int8_t *__restrict q, float sx,                        \
-      const float *__restrict scale, const std::int32_t *__restrict sum, const float *__restrict bias,           \
-      float *__restrict y
 template <Q8Kernel Kern>
 struct BuildPanel {  // the build's kernel Kern
   template <int NB> static void run(SPARSEBODY_Q8_PANEL_ARGS) noexcept { q8_panel<Kern, NB>(w, groups, q, sx, scale, sum, bias, y); }
@@ -567,11 +642,8 @@ inline void q8_panels(const PanelMatrix<float, q8>& W, const std::int8_t* q, flo
 }
 
 // ---- Run-time upgrade ----------------------------------------------------------------------------
-// The upgrade kernels repeat q8_panel's dot-product arithmetic (u_j = q_j + 128 against Q, minus
-// 128 R_r; the same accumulator sets and epilogue, so the same bits) in functions compiled for the
-// CPU feature by a target attribute. They are written without lambdas: a lambda's body would not
-// inherit the attribute. They run on the build's layout: 8 rows (x86) or 4 rows (ARM) per vector
-// divide its lane count.
+// The upgrades run the dot-product panel kernels above (q8_panel_vnni256_vex / _evex, q8_panel_sdot),
+// which a build targeting the feature runs through q8_panel: the same code, the same bits.
 enum class Q8Upgrade { none, avx_vnni, avx512vl_vnni, neon_dot };
 
 constexpr const char* q8_upgrade_name(Q8Upgrade u) {
@@ -616,111 +688,35 @@ inline Q8Upgrade detect_q8_upgrade() noexcept {
   return Q8Upgrade::none;
 }
 
+
 #if SPARSEBODY_Q8_RUNTIME_X86
-// 256-bit vpdpbusd: VEX (AVX-VNNI) or EVEX (AVX-512 VNNI + VL), one function per target.
-#define SPARSEBODY_Q8_VNNI256_PANEL(NAME, TARGET, DPBUSD)                                                         \
-  template <int NB>                                                                                               \
-  __attribute__((target(TARGET))) inline void NAME(SPARSEBODY_Q8_PANEL_ARGS) noexcept {                          \
-    constexpr int R = NB * kLanes<float>;                                                                         \
-    constexpr int NV = R / 8;                                                                                     \
-    constexpr int K = 8 / NV > 1 ? 8 / NV : 1;                                                                    \
-    __m256i acc[K][NV];                                                                                           \
-    for (int k = 0; k < K; ++k)                                                                                   \
-      for (int b = 0; b < NV; ++b) acc[k][b] = _mm256_setzero_si256();                                            \
-    int g = 0;                                                                                                    \
-    for (; g + K <= groups; g += K)                                                                               \
-      for (int k = 0; k < K; ++k) {                                                                               \
-        const __m256i ub = _mm256_set1_epi32(q8_group_word(q, g + k) ^ static_cast<std::int32_t>(0x80808080u));   \
-        const std::int8_t* wg = w + static_cast<std::size_t>(g + k) * R * 4;                                       \
-        for (int b = 0; b < NV; ++b)                                                                              \
-          acc[k][b] = DPBUSD(acc[k][b], ub, _mm256_load_si256(reinterpret_cast<const __m256i*>(wg + b * 32)));    \
-      }                                                                                                           \
-    for (; g < groups; ++g) {                                                                                     \
-      const __m256i ub = _mm256_set1_epi32(q8_group_word(q, g) ^ static_cast<std::int32_t>(0x80808080u));         \
-      const std::int8_t* wg = w + static_cast<std::size_t>(g) * R * 4;                                             \
-      for (int b = 0; b < NV; ++b)                                                                                \
-        acc[0][b] = DPBUSD(acc[0][b], ub, _mm256_load_si256(reinterpret_cast<const __m256i*>(wg + b * 32)));      \
-    }                                                                                                             \
-    const __m256 vsx = _mm256_set1_ps(sx);                                                                        \
-    for (int b = 0; b < NV; ++b) {                                                                                \
-      __m256i s = acc[0][b];                                                                                      \
-      for (int k = 1; k < K; ++k) s = _mm256_add_epi32(s, acc[k][b]);                                             \
-      s = _mm256_sub_epi32(s, _mm256_slli_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(sum + b * 8)), 7)); \
-      const __m256 f = _mm256_mul_ps(_mm256_loadu_ps(scale + b * 8), vsx);                                        \
-      const __m256 bb = bias ? _mm256_loadu_ps(bias + b * 8) : _mm256_setzero_ps();                               \
-      _mm256_storeu_ps(y + b * 8, _mm256_fmadd_ps(_mm256_cvtepi32_ps(s), f, bb));                                 \
-    }                                                                                                             \
-  }
-SPARSEBODY_Q8_VNNI256_PANEL(q8_panel_avx_vnni_rt, "avx2,fma,avxvnni", _mm256_dpbusd_avx_epi32)
-SPARSEBODY_Q8_VNNI256_PANEL(q8_panel_avx512vl_vnni_rt, "avx2,fma,avx512f,avx512vl,avx512vnni", _mm256_dpbusd_epi32)
-#undef SPARSEBODY_Q8_VNNI256_PANEL
 struct AvxVnniPanel {
-  template <int NB> static void run(SPARSEBODY_Q8_PANEL_ARGS) noexcept { q8_panel_avx_vnni_rt<NB>(w, groups, q, sx, scale, sum, bias, y); }
+  template <int NB> static void run(SPARSEBODY_Q8_PANEL_ARGS) noexcept { q8_panel_vnni256_vex<NB>(w, groups, q, sx, scale, sum, bias, y); }
 };
 struct Avx512VlVnniPanel {
-  template <int NB> static void run(SPARSEBODY_Q8_PANEL_ARGS) noexcept { q8_panel_avx512vl_vnni_rt<NB>(w, groups, q, sx, scale, sum, bias, y); }
+  template <int NB> static void run(SPARSEBODY_Q8_PANEL_ARGS) noexcept { q8_panel_vnni256_evex<NB>(w, groups, q, sx, scale, sum, bias, y); }
 };
 #endif
 
 #if SPARSEBODY_Q8_RUNTIME_ARM
-// vdotq_s32 (s8 x s8): q8_panel's neon_dot arithmetic. GCC's arm_neon.h declares it for
-// armv8.2-a+dotprod, Clang's for the "dotprod" feature.
-#if defined(__clang__)
-#define SPARSEBODY_Q8_DOTPROD_TARGET "dotprod"
-#else
-#define SPARSEBODY_Q8_DOTPROD_TARGET "arch=armv8.2-a+dotprod"
-#endif
-template <int NB>
-__attribute__((target(SPARSEBODY_Q8_DOTPROD_TARGET))) inline void q8_panel_neon_dot_rt(SPARSEBODY_Q8_PANEL_ARGS) noexcept {
-  constexpr int R = NB * kLanes<float>;
-  constexpr int NV = R / 4;
-  constexpr int K = 8 / NV > 1 ? 8 / NV : 1;
-  (void)sum;
-  int32x4_t acc[K][NV];
-  for (int k = 0; k < K; ++k)
-    for (int b = 0; b < NV; ++b) acc[k][b] = vdupq_n_s32(0);
-  int g = 0;
-  for (; g + K <= groups; g += K)
-    for (int k = 0; k < K; ++k) {
-      const int8x16_t qb = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(q, g + k)));
-      const std::int8_t* wg = w + static_cast<std::size_t>(g + k) * R * 4;
-      for (int b = 0; b < NV; ++b) acc[k][b] = vdotq_s32(acc[k][b], vld1q_s8(wg + b * 16), qb);
-    }
-  for (; g < groups; ++g) {
-    const int8x16_t qb = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(q, g)));
-    const std::int8_t* wg = w + static_cast<std::size_t>(g) * R * 4;
-    for (int b = 0; b < NV; ++b) acc[0][b] = vdotq_s32(acc[0][b], vld1q_s8(wg + b * 16), qb);
-  }
-  const float32x4_t vsx = vdupq_n_f32(sx);
-  for (int b = 0; b < NV; ++b) {
-    int32x4_t s = acc[0][b];
-    for (int k = 1; k < K; ++k) s = vaddq_s32(s, acc[k][b]);
-    const float32x4_t f = vmulq_f32(vld1q_f32(scale + b * 4), vsx);
-    const float32x4_t bb = bias ? vld1q_f32(bias + b * 4) : vdupq_n_f32(0.f);
-    vst1q_f32(y + b * 4, vfmaq_f32(bb, vcvtq_f32_s32(s), f));
-  }
-}
-#undef SPARSEBODY_Q8_DOTPROD_TARGET
 struct NeonDotPanel {
-  template <int NB> static void run(SPARSEBODY_Q8_PANEL_ARGS) noexcept { q8_panel_neon_dot_rt<NB>(w, groups, q, sx, scale, sum, bias, y); }
+  template <int NB> static void run(SPARSEBODY_Q8_PANEL_ARGS) noexcept { q8_panel_sdot<NB>(w, groups, q, sx, scale, sum, bias, y); }
 };
 #endif
 #undef SPARSEBODY_Q8_PANEL_ARGS
 
-// The panels of one quantized input with upgrade u (q8_panels with BuildPanel<kQ8Kernel> for none
-// or one this build lacks).
-inline void q8_panels_upgrade(Q8Upgrade u, const PanelMatrix<float, q8>& W, const std::int8_t* q, float sx,
-                              const float* bias, float* y) noexcept {
-  switch (u) {
-#if SPARSEBODY_Q8_RUNTIME_X86
-    case Q8Upgrade::avx_vnni: q8_panels_with<AvxVnniPanel>(W, q, sx, bias, y); return;
-    case Q8Upgrade::avx512vl_vnni: q8_panels_with<Avx512VlVnniPanel>(W, q, sx, bias, y); return;
-#endif
-#if SPARSEBODY_Q8_RUNTIME_ARM
-    case Q8Upgrade::neon_dot: q8_panels_with<NeonDotPanel>(W, q, sx, bias, y); return;
-#endif
-    default: q8_panels<kQ8Kernel>(W, q, sx, bias, y); return;
+// y[0 .. padded(rows)) = W x + bias with Panel's kernel: the input quantized (SIMD loops when kSimd),
+// a zero input giving the bias and a non-finite one NaN, then every panel.
+template <class Panel, bool kSimd>
+inline void gemv_q8_with(const PanelMatrix<float, q8>& W, const float* x, const float* bias, float* y) noexcept {
+  alignas(64) std::int8_t q[kQ8MaxCols + 4];
+  const float sx = quantize_input_q8<kSimd>(x, W.cols, q);
+  const int prows = padded<float>(W.rows);
+  if (!(sx > 0.0f)) {  // zero input: y = b; NaN input: NaN
+    for (int r = 0; r < prows; ++r) y[r] = sx == 0.0f ? (bias ? bias[r] : 0.0f) : NAN;
+    return;
   }
+  q8_panels_with<Panel>(W, q, sx, bias, y);
 }
 
 }  // namespace detail
@@ -737,27 +733,22 @@ inline const char* q8_kernel_in_use() noexcept {
 // build's best). A non-finite x gives NaN outputs (so guarded steps see it), an all-zero x the bias.
 template <Q8Kernel Kern = kQ8Kernel>
 inline void gemv_q8(const PanelMatrix<float, q8>& W, const float* x, const float* bias, float* y) noexcept {
-  alignas(64) std::int8_t q[kQ8MaxCols + 4];
-  const float sx = detail::quantize_input_q8<Kern != Q8Kernel::portable>(x, W.cols, q);
-  const int prows = padded<float>(W.rows);
-  if (!(sx > 0.0f)) {  // zero input: y = b; NaN input: NaN
-    for (int r = 0; r < prows; ++r) y[r] = sx == 0.0f ? (bias ? bias[r] : 0.0f) : NAN;
-    return;
-  }
-  detail::q8_panels<Kern>(W, q, sx, bias, y);
+  detail::gemv_q8_with<detail::BuildPanel<Kern>, Kern != Q8Kernel::portable>(W, x, bias, y);
 }
 
 // y = W x + bias with upgrade u's kernel (detail::q8_cpu_has(u) must hold; none: the build's kernel).
 inline void gemv_q8_upgrade(detail::Q8Upgrade u, const PanelMatrix<float, q8>& W, const float* x, const float* bias,
                             float* y) noexcept {
-  alignas(64) std::int8_t q[kQ8MaxCols + 4];
-  const float sx = detail::quantize_input_q8<kQ8Kernel != Q8Kernel::portable>(x, W.cols, q);
-  const int prows = padded<float>(W.rows);
-  if (!(sx > 0.0f)) {  // as gemv_q8
-    for (int r = 0; r < prows; ++r) y[r] = sx == 0.0f ? (bias ? bias[r] : 0.0f) : NAN;
-    return;
+  switch (u) {  // the build's own kernel quantizes with SIMD loops whenever it has an upgrade
+#if SPARSEBODY_Q8_RUNTIME_X86
+    case detail::Q8Upgrade::avx_vnni: detail::gemv_q8_with<detail::AvxVnniPanel, true>(W, x, bias, y); return;
+    case detail::Q8Upgrade::avx512vl_vnni: detail::gemv_q8_with<detail::Avx512VlVnniPanel, true>(W, x, bias, y); return;
+#endif
+#if SPARSEBODY_Q8_RUNTIME_ARM
+    case detail::Q8Upgrade::neon_dot: detail::gemv_q8_with<detail::NeonDotPanel, true>(W, x, bias, y); return;
+#endif
+    default: gemv_q8<kQ8Kernel>(W, x, bias, y); return;
   }
-  detail::q8_panels_upgrade(u, W, q, sx, bias, y);
 }
 
 // The product every network runs: the CPU's upgrade where it has one (kQ8Upgrade), else the build's
