@@ -150,7 +150,7 @@ TEST_CASE("int8 run-time upgrades this CPU has equal the portable kernel bit for
             for (float& v : x) v = rep == 0 ? 1.f : draw(rng, kind) * (rep == 2 ? 1e-3f : 1.f);
             gemv_kernel(Q8Kernel::portable, p.m, x.data(), rep == 1 ? nullptr : bias.data(), y0.data());
             for (int r = 0; r < nn::padded<float>(rows); ++r) y1[r] = -12345.f;
-            nn::gemv_q8_upgrade(u, p.m, x.data(), rep == 1 ? nullptr : bias.data(), y1.data());
+            nn::detail::gemv_q8_upgrade(u, p.m, x.data(), rep == 1 ? nullptr : bias.data(), y1.data());
             for (int r = 0; r < nn::padded<float>(rows); ++r)
               REQUIRE_MESSAGE(same_bits(y0[r], y1[r]), nn::detail::q8_upgrade_name(u) << " rows " << rows << " cols " << cols
                                                                                       << " kind " << kind << " rep " << rep
@@ -166,7 +166,7 @@ TEST_CASE("int8 run-time upgrades this CPU has equal the portable kernel bit for
   const char* env = std::getenv("SPARSEBODY_Q8_RUNTIME");
   const bool off = env && (std::string(env) == "off" || std::string(env) == "0");
   Q8Upgrade expect = Q8Upgrade::none;
-  for (Q8Upgrade u : {Q8Upgrade::avx_vnni, Q8Upgrade::avx512vl_vnni, Q8Upgrade::neon_dot})
+  for (Q8Upgrade u : nn::detail::kQ8UpgradeOrder)
     if (!off && expect == Q8Upgrade::none && nn::detail::q8_cpu_has(u)) expect = u;
   CHECK(nn::kQ8Upgrade == expect);
   MESSAGE("gemv runs: " << std::string(nn::q8_kernel_in_use()) << std::string(off ? " (SPARSEBODY_Q8_RUNTIME=off)" : ""));
@@ -281,4 +281,55 @@ TEST_CASE("int8 batched product: zero and NaN inputs inside a group of instances
       }
     }
   }
+}
+
+TEST_CASE("int8 batched run-time upgrades this CPU has equal portable single products bit for bit") {
+  // detail::gemv_batch_q8_upgrade: groups of 2 (AVX-VNNI) or 4 (AVX-512 VNNI on ymm, NEON dot product)
+  // instances share each weight load on the full panels; the rest goes one by one. Instance counts
+  // around the group sizes, zero and NaN inputs inside a group, panels with and without tails.
+  using nn::detail::Q8Upgrade;
+  using W = nn::PanelMatrix<float, nn::q8>;
+  constexpr int L = nn::kLanes<float>;
+  std::mt19937 rng(17);
+  std::normal_distribution<float> d(0.f, 1.f);
+  std::string ran;
+  long compared = 0;
+  for (Q8Upgrade u : {Q8Upgrade::avx_vnni, Q8Upgrade::avx512vl_vnni, Q8Upgrade::neon_dot, Q8Upgrade::none}) {
+    if (u != Q8Upgrade::none && !nn::detail::q8_cpu_has(u)) continue;
+    ran += std::string(ran.empty() ? "" : "; ") +
+           (u == Q8Upgrade::none ? std::string("the build's kernel, ") + nn::q8_kernel_name(nn::kQ8Kernel)
+                                 : std::string(nn::detail::q8_upgrade_name(u)));
+    for (int rows : {3, 8 * L, 8 * L + 5, 24 * L + 2 * L})
+      for (int cols : {5, 37, 868}) {
+        std::vector<float> dense(static_cast<std::size_t>(rows) * cols), bias(static_cast<std::size_t>(nn::padded<float>(rows)));
+        for (float& v : dense) v = draw(rng, 2);
+        for (float& v : bias) v = d(rng);
+        const Packed packed(dense, rows, cols);
+        const W& m = packed.m;
+        for (int n : {1, 2, 3, 4, 5, 8, 11, 16}) {
+          std::vector<std::vector<float>> x(n, std::vector<float>(cols));
+          for (int i = 0; i < n; ++i)
+            for (float& v : x[i]) v = d(rng) * static_cast<float>(i + 1);
+          if (n >= 3) std::fill(x[1].begin(), x[1].end(), 0.f);          // zero input: the bias
+          if (n >= 8) x[6][cols / 2] = std::numeric_limits<float>::quiet_NaN();  // NaN input: NaN rows
+          std::vector<std::vector<float>> yb(n, std::vector<float>(bias.size(), -1.f)), ys = yb;
+          std::vector<const float*> xp(n);
+          std::vector<float*> yp(n);
+          for (int i = 0; i < n; ++i) xp[i] = x[i].data(), yp[i] = yb[i].data();
+          nn::detail::gemv_batch_q8_upgrade(u, m, n, xp.data(), n % 2 ? bias.data() : nullptr, yp.data());
+          for (int i = 0; i < n; ++i) {
+            gemv_kernel(Q8Kernel::portable, m, x[i].data(), n % 2 ? bias.data() : nullptr, ys[i].data());
+            CAPTURE(rows);
+            CAPTURE(cols);
+            CAPTURE(n);
+            CAPTURE(i);
+            for (int r = 0; r < nn::padded<float>(rows); ++r)
+              REQUIRE_MESSAGE(same_bits(ys[i][r], yb[i][r]), nn::detail::q8_upgrade_name(u) << " row " << r << ": " << yb[i][r]
+                                                                                  << " vs portable " << ys[i][r]);
+            ++compared;
+          }
+        }
+      }
+  }
+  MESSAGE("batched, compared with portable singles: " << ran << " (" << compared << " instance products)");
 }

@@ -9,8 +9,8 @@
 //   crowd[3].world();                      // user 3's pose, as LoBSTrPipeline::push would give it
 //
 // Every user's results equal a LoBSTrPipeline of its own stepped with the same frames, bit for
-// bit (tests/pipeline/test_batch.cpp), float, f16 and int8 storage (int8 shares weight loads with
-// the VNNI kernels only: nn/int8.hpp gemv_batch_q8). push() takes device frames as
+// bit (tests/pipeline/test_batch.cpp), float, f16 and int8 storage (int8 shares weight loads where
+// the CPU has an 8-bit dot product: nn/int8.hpp gemv_batch). push() takes device frames as
 // LoBSTrPipeline::push does (each user's own resampling, recentre and controller-swap checks);
 // step() takes model-rate frames as LoBSTrPipeline::step does (the caller resamples; frame times
 // still matter: the sanitiser sees them). Streaming mode only (Window mode replays

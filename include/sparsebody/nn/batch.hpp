@@ -1,7 +1,8 @@
 // N instances of one network sharing one weight set, stepped together (e.g. several avatars in a
 // scene): each weight matrix is streamed once per frame for all of them instead of once per
-// instance (float and f16 storage; q8 with the VNNI kernels, in groups of 4 / 2 instances, and
-// one product per instance elsewhere: int8.hpp gemv_batch_q8).
+// instance (float and f16 storage; q8 with a dot-product kernel, built in or the run-time upgrade:
+// groups of 4 (AVX-512 VNNI, NEON dot product) or 2 (AVX-VNNI) instances, and one product per
+// instance elsewhere: int8.hpp gemv_batch).
 //
 //   auto weights = nn::NetworkWeights<Net>::load("model.json", "lobstr");
 //   nn::NetworkBatch<Net> crowd(weights, 16);        // allocates the 16 states once

@@ -299,6 +299,11 @@ inline std::int32_t q8_group_word(const std::int8_t* q, int g) noexcept {
   const std::int8_t *__restrict w, int groups, const std::int8_t *__restrict q, float sx,                        \
       const float *__restrict scale, const std::int32_t *__restrict sum, const float *__restrict bias,           \
       float *__restrict y
+// The batched kernels' arguments: M instances' quantized inputs, scales and outputs (full panels only).
+#define SPARSEBODY_Q8_BATCH_ARGS                                                                                  \
+  const std::int8_t *__restrict w, int groups, const std::int8_t *const *q, const float *sx,                    \
+      const float *__restrict scale, const std::int32_t *__restrict sum, const float *__restrict bias,           \
+      float *const *y
 #if SPARSEBODY_Q8_AVXVNNI || SPARSEBODY_Q8_RUNTIME_X86
 // 256-bit vpdpbusd: VEX (AVX-VNNI: the -mavxvnni build's kernel and the upgrade) or EVEX (AVX-512
 // VNNI + VL: the upgrade only), one function per target.
@@ -335,11 +340,52 @@ inline std::int32_t q8_group_word(const std::int8_t* q, int g) noexcept {
       _mm256_storeu_ps(y + b * 8, _mm256_fmadd_ps(_mm256_cvtepi32_ps(s), f, bb));                                 \
     }                                                                                                             \
   }
+// M instances through one full panel (NV vectors of 8 rows), in sub-blocks of 4 vectors: each weight
+// vector is loaded once per column group and multiplied with every instance's input word (M x 4
+// accumulators in registers: M = 3 fills the 16 ymm of VEX code, 4 fits the 32 of EVEX). Exact int32 sums and
+// the epilogue above: every instance gets its own single-panel result bit for bit.
+#define SPARSEBODY_Q8_VNNI256_BATCH(NAME, TARGET, DPBUSD)                                                         \
+  template <int M>                                                                                                \
+  SPARSEBODY_Q8_TARGET(TARGET) inline void NAME(SPARSEBODY_Q8_BATCH_ARGS) noexcept {                           \
+    constexpr int R = kPanelBatches * kLanes<float>;                                                              \
+    constexpr int NV = R / 8, NVB = 4;                                                                            \
+    static_assert(NV % NVB == 0, "panel vectors must split into sub-blocks of 4");                                \
+    const std::int8_t* qq[M];                                                                                     \
+    for (int m = 0; m < M; ++m) qq[m] = q[m];                                                                     \
+    for (int b0 = 0; b0 < NV; b0 += NVB) {                                                                        \
+      __m256i acc[M][NVB];                                                                                        \
+      for (int m = 0; m < M; ++m)                                                                                 \
+        for (int b = 0; b < NVB; ++b) acc[m][b] = _mm256_setzero_si256();                                         \
+      for (int g = 0; g < groups; ++g) {                                                                          \
+        __m256i ub[M];                                                                                            \
+        for (int m = 0; m < M; ++m)                                                                               \
+          ub[m] = _mm256_set1_epi32(q8_group_word(qq[m], g) ^ static_cast<std::int32_t>(0x80808080u));            \
+        const std::int8_t* wg = w + static_cast<std::size_t>(g) * R * 4 + b0 * 32;                                \
+        for (int b = 0; b < NVB; ++b) {                                                                           \
+          const __m256i wv = _mm256_load_si256(reinterpret_cast<const __m256i*>(wg + b * 32));                    \
+          for (int m = 0; m < M; ++m) acc[m][b] = DPBUSD(acc[m][b], ub[m], wv);                                   \
+        }                                                                                                         \
+      }                                                                                                           \
+      for (int b = 0; b < NVB; ++b) {                                                                             \
+        const int r = (b0 + b) * 8;                                                                               \
+        const __m256i rs = _mm256_slli_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(sum + r)), 7);  \
+        const __m256 sc = _mm256_loadu_ps(scale + r);                                                             \
+        const __m256 bb = bias ? _mm256_loadu_ps(bias + r) : _mm256_setzero_ps();                                 \
+        for (int m = 0; m < M; ++m) {                                                                             \
+          const __m256 f = _mm256_mul_ps(sc, _mm256_set1_ps(sx[m]));                                              \
+          _mm256_storeu_ps(y[m] + r, _mm256_fmadd_ps(_mm256_cvtepi32_ps(_mm256_sub_epi32(acc[m][b], rs)), f, bb)); \
+        }                                                                                                         \
+      }                                                                                                           \
+    }                                                                                                             \
+  }
 SPARSEBODY_Q8_VNNI256_PANEL(q8_panel_vnni256_vex, "avx2,fma,avxvnni", _mm256_dpbusd_avx_epi32)
+SPARSEBODY_Q8_VNNI256_BATCH(q8_panel_batch_vnni256_vex, "avx2,fma,avxvnni", _mm256_dpbusd_avx_epi32)
 #if SPARSEBODY_Q8_RUNTIME_X86
 SPARSEBODY_Q8_VNNI256_PANEL(q8_panel_vnni256_evex, "avx2,fma,avx512f,avx512vl,avx512vnni", _mm256_dpbusd_epi32)
+SPARSEBODY_Q8_VNNI256_BATCH(q8_panel_batch_vnni256_evex, "avx2,fma,avx512f,avx512vl,avx512vnni", _mm256_dpbusd_epi32)
 #endif
 #undef SPARSEBODY_Q8_VNNI256_PANEL
+#undef SPARSEBODY_Q8_VNNI256_BATCH
 #endif
 #if SPARSEBODY_Q8_NEON_DOT || SPARSEBODY_Q8_RUNTIME_ARM
 // vdotq_s32 (s8 x s8): the armv8.2-a+dotprod build's kernel and the upgrade. GCC's arm_neon.h declares it for
@@ -377,6 +423,40 @@ SPARSEBODY_Q8_TARGET(SPARSEBODY_Q8_DOTPROD_TARGET) inline void q8_panel_sdot(SPA
     const float32x4_t f = vmulq_f32(vld1q_f32(scale + b * 4), vsx);
     const float32x4_t bb = bias ? vld1q_f32(bias + b * 4) : vdupq_n_f32(0.f);
     vst1q_f32(y + b * 4, vfmaq_f32(bb, vcvtq_f32_s32(s), f));
+  }
+}
+// M instances through one full panel (NV vectors of 4 rows) in sub-blocks of 4 vectors, each weight
+// vector loaded once per column group for all M (M x 4 of the 32 q registers), as the VNNI batch.
+template <int M>
+SPARSEBODY_Q8_TARGET(SPARSEBODY_Q8_DOTPROD_TARGET) inline void q8_panel_batch_sdot(SPARSEBODY_Q8_BATCH_ARGS) noexcept {
+  constexpr int R = kPanelBatches * kLanes<float>;
+  constexpr int NV = R / 4, NVB = 4;
+  static_assert(NV % NVB == 0, "panel vectors must split into sub-blocks of 4");
+  (void)sum;
+  const std::int8_t* qq[M];
+  for (int m = 0; m < M; ++m) qq[m] = q[m];
+  for (int b0 = 0; b0 < NV; b0 += NVB) {
+    int32x4_t acc[M][NVB];
+    for (int m = 0; m < M; ++m)
+      for (int b = 0; b < NVB; ++b) acc[m][b] = vdupq_n_s32(0);
+    for (int g = 0; g < groups; ++g) {
+      int8x16_t qb[M];
+      for (int m = 0; m < M; ++m) qb[m] = vreinterpretq_s8_s32(vdupq_n_s32(q8_group_word(qq[m], g)));
+      const std::int8_t* wg = w + static_cast<std::size_t>(g) * R * 4 + b0 * 16;
+      for (int b = 0; b < NVB; ++b) {
+        const int8x16_t wv = vld1q_s8(wg + b * 16);
+        for (int m = 0; m < M; ++m) acc[m][b] = vdotq_s32(acc[m][b], wv, qb[m]);
+      }
+    }
+    for (int b = 0; b < NVB; ++b) {
+      const int r = (b0 + b) * 4;
+      const float32x4_t sc = vld1q_f32(scale + r);
+      const float32x4_t bb = bias ? vld1q_f32(bias + r) : vdupq_n_f32(0.f);
+      for (int m = 0; m < M; ++m) {
+        const float32x4_t f = vmulq_f32(sc, vdupq_n_f32(sx[m]));
+        vst1q_f32(y[m] + r, vfmaq_f32(bb, vcvtq_f32_s32(acc[m][b]), f));
+      }
+    }
   }
 }
 #undef SPARSEBODY_Q8_DOTPROD_TARGET
@@ -512,12 +592,12 @@ inline void q8_panel(const std::int8_t* __restrict w, int groups, const std::int
 }
 
 // M instances through one full panel (NB = kPanelBatches, R = NB * L rows) with a dot-product
-// kernel (VNNI): each weight vector is loaded once per column group and multiplied with every
-// instance's input word, in sub-blocks of NVB vectors (M x NVB accumulators stay in registers).
-// The int32 sums are exact, and the epilogue is q8_panel's, so every instance's outputs equal
-// its own q8_panel call bit for bit.
+// kernel: each weight vector is loaded once per column group and multiplied with every instance's
+// input word, in sub-blocks of NVB vectors (M x NVB accumulators stay in registers). The int32 sums
+// are exact, and the epilogue is q8_panel's, so every instance's outputs equal its own q8_panel call
+// bit for bit. AVX-512 VNNI: 4 instances on zmm; AVX-VNNI: 3 on ymm (16 registers); dot product: 4.
 template <Q8Kernel Kern> constexpr int q8_batch_instances() {
-  return Kern == Q8Kernel::avx512_vnni ? 4 : Kern == Q8Kernel::avx_vnni ? 2 : 1;
+  return Kern == Q8Kernel::avx512_vnni || Kern == Q8Kernel::neon_dot ? 4 : Kern == Q8Kernel::avx_vnni ? 3 : 1;
 }
 template <Q8Kernel Kern> constexpr bool q8_batch_kernel() {
 #if SPARSEBODY_Q8_AVX512
@@ -526,17 +606,17 @@ template <Q8Kernel Kern> constexpr bool q8_batch_kernel() {
 #if SPARSEBODY_Q8_AVXVNNI
   if (Kern == Q8Kernel::avx_vnni) return true;
 #endif
+#if SPARSEBODY_Q8_NEON_DOT
+  if (Kern == Q8Kernel::neon_dot) return true;
+#endif
   return false;
 }
 template <Q8Kernel Kern, int M>
-inline void q8_panel_batch(const std::int8_t* __restrict w, int groups, const std::int8_t* const* q, const float* sx,
-                           const float* __restrict scale, const std::int32_t* __restrict sum, const float* __restrict bias,
-                           float* const* y) noexcept {
+inline void q8_panel_batch(SPARSEBODY_Q8_BATCH_ARGS) noexcept {
   constexpr int R = kPanelBatches * kLanes<float>;
-  constexpr int V = q8_kernel_rows(Kern);  // rows per vector
-  constexpr int NV = R / V;
-  constexpr int NVB = 4;
-  static_assert(NV % NVB == 0, "panel vectors must split into sub-blocks of 4");
+  [[maybe_unused]] constexpr int V = q8_kernel_rows(Kern);  // rows per vector
+  [[maybe_unused]] constexpr int NV = R / V;
+  [[maybe_unused]] constexpr int NVB = 4;
   [[maybe_unused]] const std::int8_t* qq[M];
   for (int m = 0; m < M; ++m) qq[m] = q[m];
 #if SPARSEBODY_Q8_AVX512
@@ -571,31 +651,13 @@ inline void q8_panel_batch(const std::int8_t* __restrict w, int groups, const st
 #endif
 #if SPARSEBODY_Q8_AVXVNNI
   if constexpr (Kern == Q8Kernel::avx_vnni) {
-    for (int b0 = 0; b0 < NV; b0 += NVB) {
-      __m256i acc[M][NVB];
-      for (int m = 0; m < M; ++m)
-        for (int b = 0; b < NVB; ++b) acc[m][b] = _mm256_setzero_si256();
-      for (int g = 0; g < groups; ++g) {
-        __m256i ub[M];
-        for (int m = 0; m < M; ++m) ub[m] = _mm256_set1_epi32(q8_group_word(qq[m], g) ^ static_cast<std::int32_t>(0x80808080u));
-        const std::int8_t* wg = w + static_cast<std::size_t>(g) * R * 4 + b0 * 32;
-        for (int b = 0; b < NVB; ++b) {
-          const __m256i wv = _mm256_load_si256(reinterpret_cast<const __m256i*>(wg + b * 32));
-          for (int m = 0; m < M; ++m) acc[m][b] = _mm256_dpbusd_avx_epi32(acc[m][b], ub[m], wv);
-        }
-      }
-      for (int b = 0; b < NVB; ++b) {
-        const int r = (b0 + b) * 8;
-        const __m256i rs = _mm256_slli_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(sum + r)), 7);
-        const __m256 sc = _mm256_loadu_ps(scale + r);
-        const __m256 bb = bias ? _mm256_loadu_ps(bias + r) : _mm256_setzero_ps();
-        for (int m = 0; m < M; ++m) {
-          const __m256i s = _mm256_sub_epi32(acc[m][b], rs);
-          const __m256 f = _mm256_mul_ps(sc, _mm256_set1_ps(sx[m]));
-          _mm256_storeu_ps(y[m] + r, _mm256_fmadd_ps(_mm256_cvtepi32_ps(s), f, bb));
-        }
-      }
-    }
+    q8_panel_batch_vnni256_vex<M>(w, groups, q, sx, scale, sum, bias, y);
+    return;
+  }
+#endif
+#if SPARSEBODY_Q8_NEON_DOT
+  if constexpr (Kern == Q8Kernel::neon_dot) {
+    q8_panel_batch_sdot<M>(w, groups, q, sx, scale, sum, bias, y);
     return;
   }
 #endif
@@ -634,6 +696,11 @@ inline void q8_panels_with(const PanelMatrix<float, q8>& W, const std::int8_t* q
 template <Q8Kernel Kern>
 struct BuildPanel {  // the build's kernel Kern
   template <int NB> static void run(SPARSEBODY_Q8_PANEL_ARGS) noexcept { q8_panel<Kern, NB>(w, groups, q, sx, scale, sum, bias, y); }
+};
+template <Q8Kernel Kern>
+struct BuildBatchPanel {  // M instances per weight load with the build's kernel (M = 1: none, one product each)
+  static constexpr int M = q8_batch_kernel<Kern>() ? q8_batch_instances<Kern>() : 1;
+  static void run(SPARSEBODY_Q8_BATCH_ARGS) noexcept { q8_panel_batch<Kern, M>(w, groups, q, sx, scale, sum, bias, y); }
 };
 template <Q8Kernel Kern>
 inline void q8_panels(const PanelMatrix<float, q8>& W, const std::int8_t* q, float sx, const float* bias, float* y,
@@ -678,12 +745,18 @@ inline bool q8_cpu_has(Q8Upgrade u) noexcept {
   return false;
 }
 
+// The upgrades in the order gemv() prefers them. AVX-512 VNNI + VL first on CPUs with both (Sapphire
+// Rapids, Zen 5): its 32 registers let a batch share each weight load among 4 instances (1.2-1.3x the
+// single products at 16 instances on a Sapphire Rapids-class Xeon, where AVX-VNNI's 3 gain ~1.1x); one
+// product runs the same on either.
+inline constexpr Q8Upgrade kQ8UpgradeOrder[] = {Q8Upgrade::avx512vl_vnni, Q8Upgrade::avx_vnni, Q8Upgrade::neon_dot};
+
 // The upgrade gemv() takes: the first the CPU has, unless SPARSEBODY_Q8_RUNTIME=off (or 0) is in
 // the environment (to compare with the build's kernel, or to rule the upgrade out).
 inline Q8Upgrade detect_q8_upgrade() noexcept {
   const char* env = std::getenv("SPARSEBODY_Q8_RUNTIME");
   if (env && (std::strcmp(env, "off") == 0 || std::strcmp(env, "0") == 0)) return Q8Upgrade::none;
-  for (Q8Upgrade u : {Q8Upgrade::avx_vnni, Q8Upgrade::avx512vl_vnni, Q8Upgrade::neon_dot})
+  for (Q8Upgrade u : kQ8UpgradeOrder)
     if (q8_cpu_has(u)) return u;
   return Q8Upgrade::none;
 }
@@ -693,8 +766,16 @@ inline Q8Upgrade detect_q8_upgrade() noexcept {
 struct AvxVnniPanel {
   template <int NB> static void run(SPARSEBODY_Q8_PANEL_ARGS) noexcept { q8_panel_vnni256_vex<NB>(w, groups, q, sx, scale, sum, bias, y); }
 };
+struct AvxVnniBatchPanel {  // VEX code has 16 ymm registers: 3 instances x 4 accumulators + 3 inputs + 1 weight
+  static constexpr int M = q8_batch_instances<Q8Kernel::avx_vnni>();
+  static void run(SPARSEBODY_Q8_BATCH_ARGS) noexcept { q8_panel_batch_vnni256_vex<M>(w, groups, q, sx, scale, sum, bias, y); }
+};
 struct Avx512VlVnniPanel {
   template <int NB> static void run(SPARSEBODY_Q8_PANEL_ARGS) noexcept { q8_panel_vnni256_evex<NB>(w, groups, q, sx, scale, sum, bias, y); }
+};
+struct Avx512VlVnniBatchPanel {  // EVEX code has 32: 4 instances x 4 accumulators (the zmm kernel's grouping)
+  static constexpr int M = 4;
+  static void run(SPARSEBODY_Q8_BATCH_ARGS) noexcept { q8_panel_batch_vnni256_evex<M>(w, groups, q, sx, scale, sum, bias, y); }
 };
 #endif
 
@@ -702,8 +783,13 @@ struct Avx512VlVnniPanel {
 struct NeonDotPanel {
   template <int NB> static void run(SPARSEBODY_Q8_PANEL_ARGS) noexcept { q8_panel_sdot<NB>(w, groups, q, sx, scale, sum, bias, y); }
 };
+struct NeonDotBatchPanel {  // 32 q registers: 4 instances x 4 accumulators
+  static constexpr int M = 4;
+  static void run(SPARSEBODY_Q8_BATCH_ARGS) noexcept { q8_panel_batch_sdot<M>(w, groups, q, sx, scale, sum, bias, y); }
+};
 #endif
 #undef SPARSEBODY_Q8_PANEL_ARGS
+#undef SPARSEBODY_Q8_BATCH_ARGS
 
 // y[0 .. padded(rows)) = W x + bias with Panel's kernel: the input quantized (SIMD loops when kSimd),
 // a zero input giving the bias and a non-finite one NaN, then every panel.
@@ -717,6 +803,58 @@ inline void gemv_q8_with(const PanelMatrix<float, q8>& W, const float* x, const 
     return;
   }
   q8_panels_with<Panel>(W, q, sx, bias, y);
+}
+
+
+// n products with one weight set, equal to n gemv_q8_with<Panel, kSimd> calls bit for bit: each
+// instance quantizes its own input; groups of BatchPanel::M instances (M >= 2) share each weight load
+// on the full panels; zero / non-finite inputs, the instances left over and the tail rows take
+// Panel's single-instance path.
+template <class Panel, class BatchPanel, bool kSimd>
+inline void gemv_batch_q8_with(const PanelMatrix<float, q8>& W, int n, const float* const* x, const float* bias,
+                               float* const* y) noexcept {
+  constexpr int M = BatchPanel::M;
+  if constexpr (M < 2) {
+    for (int i = 0; i < n; ++i) gemv_q8_with<Panel, kSimd>(W, x[i], bias, y[i]);
+  } else {
+    constexpr int P = kPanelBatches * kLanes<float>;
+    alignas(64) std::int8_t q[M][kQ8MaxCols + 4];
+    const std::int8_t* qp[M];
+    float sx[M];
+    float* yp[M];
+    const int prows = padded<float>(W.rows);
+    const int groups = q8_groups(W.cols);
+    const int full = prows / P * P;  // rows in full panels
+    int m = 0;
+    auto flush = [&](int count) {
+      if (count == M) {
+        const std::int8_t* w = W.data;
+        for (int r0 = 0; r0 < full; r0 += P, w += static_cast<std::size_t>(P) * 4 * groups) {
+          float* yr[M];
+          for (int k = 0; k < M; ++k) yr[k] = yp[k] + r0;
+          BatchPanel::run(w, groups, qp, sx, W.row_scale + r0, W.row_sum + r0, bias ? bias + r0 : nullptr, yr);
+        }
+        for (int k = 0; k < M; ++k) q8_panels_with<Panel>(W, qp[k], sx[k], bias, yp[k], full);
+      } else {
+        for (int k = 0; k < count; ++k) q8_panels_with<Panel>(W, qp[k], sx[k], bias, yp[k]);
+      }
+    };
+    for (int i = 0; i < n; ++i) {
+      const float s = quantize_input_q8<kSimd>(x[i], W.cols, q[m]);
+      if (!(s > 0.0f)) {  // as gemv_q8_with: zero input gives the bias, NaN input NaN
+        for (int r = 0; r < prows; ++r) y[i][r] = s == 0.0f ? (bias ? bias[r] : 0.0f) : NAN;
+        continue;
+      }
+      qp[m] = q[m];
+      sx[m] = s;
+      yp[m] = y[i];
+      if (++m == M) {
+        flush(M);
+        m = 0;
+      }
+    }
+    flush(m);
+  }
 }
 
 }  // namespace detail
@@ -736,91 +874,71 @@ inline void gemv_q8(const PanelMatrix<float, q8>& W, const float* x, const float
   detail::gemv_q8_with<detail::BuildPanel<Kern>, Kern != Q8Kernel::portable>(W, x, bias, y);
 }
 
-// y = W x + bias with upgrade u's kernel (detail::q8_cpu_has(u) must hold; none: the build's kernel).
-inline void gemv_q8_upgrade(detail::Q8Upgrade u, const PanelMatrix<float, q8>& W, const float* x, const float* bias,
+// Batched int8 product with kernel Kern, equal to n gemv_q8<Kern> calls bit for bit: with a
+// dot-product kernel (AVX-512 VNNI: 4 instances, AVX-VNNI: 3, NEON dot product: 4) the full panels
+// of groups of instances share each weight load (q8_panel_batch); zero / non-finite inputs, the
+// instances left over and the tail rows take the single-instance path. Other kernels (AVX2 without
+// VNNI: the sign trick needs the input per weight vector; NEON without the dot product; portable)
+// run one product per instance.
+template <Q8Kernel Kern = kQ8Kernel>
+inline void gemv_batch_q8(const PanelMatrix<float, q8>& W, int n, const float* const* x, const float* bias,
+                          float* const* y) noexcept {
+  detail::gemv_batch_q8_with<detail::BuildPanel<Kern>, detail::BuildBatchPanel<Kern>, Kern != Q8Kernel::portable>(
+      W, n, x, bias, y);
+}
+
+namespace detail {
+// One product and n products with upgrade u's kernels (none: the build's). u must be one this CPU
+// runs (q8_cpu_has(u)): on another CPU its instructions are illegal, which is why these are not
+// public API. gemv() / gemv_batch() call them with kQ8Upgrade; the tests with each upgrade the CPU has.
+// The build's own kernel quantizes with SIMD loops whenever it has an upgrade.
+inline void gemv_q8_upgrade(Q8Upgrade u, const PanelMatrix<float, q8>& W, const float* x, const float* bias,
                             float* y) noexcept {
-  switch (u) {  // the build's own kernel quantizes with SIMD loops whenever it has an upgrade
+  switch (u) {
 #if SPARSEBODY_Q8_RUNTIME_X86
-    case detail::Q8Upgrade::avx_vnni: detail::gemv_q8_with<detail::AvxVnniPanel, true>(W, x, bias, y); return;
-    case detail::Q8Upgrade::avx512vl_vnni: detail::gemv_q8_with<detail::Avx512VlVnniPanel, true>(W, x, bias, y); return;
+    case Q8Upgrade::avx_vnni: gemv_q8_with<AvxVnniPanel, true>(W, x, bias, y); return;
+    case Q8Upgrade::avx512vl_vnni: gemv_q8_with<Avx512VlVnniPanel, true>(W, x, bias, y); return;
 #endif
 #if SPARSEBODY_Q8_RUNTIME_ARM
-    case detail::Q8Upgrade::neon_dot: detail::gemv_q8_with<detail::NeonDotPanel, true>(W, x, bias, y); return;
+    case Q8Upgrade::neon_dot: gemv_q8_with<NeonDotPanel, true>(W, x, bias, y); return;
 #endif
     default: gemv_q8<kQ8Kernel>(W, x, bias, y); return;
   }
 }
+inline void gemv_batch_q8_upgrade(Q8Upgrade u, const PanelMatrix<float, q8>& W, int n, const float* const* x,
+                                  const float* bias, float* const* y) noexcept {
+  switch (u) {
+#if SPARSEBODY_Q8_RUNTIME_X86
+    case Q8Upgrade::avx_vnni: gemv_batch_q8_with<AvxVnniPanel, AvxVnniBatchPanel, true>(W, n, x, bias, y); return;
+    case Q8Upgrade::avx512vl_vnni:
+      gemv_batch_q8_with<Avx512VlVnniPanel, Avx512VlVnniBatchPanel, true>(W, n, x, bias, y);
+      return;
+#endif
+#if SPARSEBODY_Q8_RUNTIME_ARM
+    case Q8Upgrade::neon_dot: gemv_batch_q8_with<NeonDotPanel, NeonDotBatchPanel, true>(W, n, x, bias, y); return;
+#endif
+    default: gemv_batch_q8<kQ8Kernel>(W, n, x, bias, y); return;
+  }
+}
+}  // namespace detail
 
-// The product every network runs: the CPU's upgrade where it has one (kQ8Upgrade), else the build's
-// kernel. The branch is taken the same way every call.
+// The products every network runs: the CPU's upgrade where it has one (kQ8Upgrade), else the
+// build's kernel. The branch is taken the same way every call.
 inline void gemv(const PanelMatrix<float, q8>& W, const float* x, const float* bias, float* y) noexcept {
 #if SPARSEBODY_Q8_RUNTIME_X86 || SPARSEBODY_Q8_RUNTIME_ARM
   if (kQ8Upgrade != detail::Q8Upgrade::none) {
-    gemv_q8_upgrade(kQ8Upgrade, W, x, bias, y);
+    detail::gemv_q8_upgrade(kQ8Upgrade, W, x, bias, y);
     return;
   }
 #endif
   gemv_q8<kQ8Kernel>(W, x, bias, y);
 }
 
-// Batched int8 product, equal to n gemv_q8 calls bit for bit: each instance quantizes its own
-// input; with a dot-product kernel (AVX-512 VNNI: 4 instances, AVX-VNNI: 2) the full panels of
-// groups of instances share each weight load (q8_panel_batch); zero / non-finite inputs, the
-// instances left over and the tail rows take the single-instance path. Other kernels (AVX2
-// without VNNI: the sign trick needs the input per weight vector; NEON; portable) run one
-// product per instance.
-template <Q8Kernel Kern = kQ8Kernel>
-inline void gemv_batch_q8(const PanelMatrix<float, q8>& W, int n, const float* const* x, const float* bias,
-                          float* const* y) noexcept {
-  constexpr int M = detail::q8_batch_instances<Kern>();
-  if constexpr (!detail::q8_batch_kernel<Kern>() || M < 2) {
-    for (int i = 0; i < n; ++i) gemv_q8<Kern>(W, x[i], bias, y[i]);
-  } else {
-    constexpr int P = kPanelBatches * kLanes<float>;
-    alignas(64) std::int8_t q[M][kQ8MaxCols + 4];
-    const std::int8_t* qp[M];
-    float sx[M];
-    float* yp[M];
-    const int prows = padded<float>(W.rows);
-    const int groups = q8_groups(W.cols);
-    const int full = prows / P * P;  // rows in full panels
-    int m = 0;
-    auto flush = [&](int count) {
-      if (count == M) {
-        const std::int8_t* w = W.data;
-        for (int r0 = 0; r0 < full; r0 += P, w += static_cast<std::size_t>(P) * 4 * groups) {
-          float* yr[M];
-          for (int k = 0; k < M; ++k) yr[k] = yp[k] + r0;
-          detail::q8_panel_batch<Kern, M>(w, groups, qp, sx, W.row_scale + r0, W.row_sum + r0, bias ? bias + r0 : nullptr, yr);
-        }
-        for (int k = 0; k < M; ++k) detail::q8_panels<Kern>(W, qp[k], sx[k], bias, yp[k], full);
-      } else {
-        for (int k = 0; k < count; ++k) detail::q8_panels<Kern>(W, qp[k], sx[k], bias, yp[k]);
-      }
-    };
-    for (int i = 0; i < n; ++i) {
-      const float s = detail::quantize_input_q8<true>(x[i], W.cols, q[m]);
-      if (!(s > 0.0f)) {  // as gemv_q8: zero input gives the bias, NaN input NaN
-        for (int r = 0; r < prows; ++r) y[i][r] = s == 0.0f ? (bias ? bias[r] : 0.0f) : NAN;
-        continue;
-      }
-      qp[m] = q[m];
-      sx[m] = s;
-      yp[m] = y[i];
-      if (++m == M) {
-        flush(M);
-        m = 0;
-      }
-    }
-    flush(m);
-  }
-}
-
 inline void gemv_batch(const PanelMatrix<float, q8>& W, int n, const float* const* x, const float* bias,
                        float* const* y) noexcept {
 #if SPARSEBODY_Q8_RUNTIME_X86 || SPARSEBODY_Q8_RUNTIME_ARM
-  if (kQ8Upgrade != detail::Q8Upgrade::none) {  // one product per instance (as the build's AVX2 / NEON kernels)
-    for (int i = 0; i < n; ++i) gemv_q8_upgrade(kQ8Upgrade, W, x[i], bias, y[i]);
+  if (kQ8Upgrade != detail::Q8Upgrade::none) {
+    detail::gemv_batch_q8_upgrade(kQ8Upgrade, W, n, x, bias, y);
     return;
   }
 #endif
