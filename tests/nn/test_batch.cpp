@@ -88,11 +88,12 @@ TEST_CASE("NetworkBatch of an MLP equals separate instances bit for bit (float, 
   check_all_counts<Mlp<float, nn::q8>>(t);
 }
 
-TEST_CASE("NetworkBatch steps never allocate; sizes outside 1..kBatchMax are refused at construction") {
-  using Net = GruStack<float, float>;
-  auto w = weights_from_table<Net>(gru_table(), "test");
+template <class Net>
+void check_batch_never_allocates(const io::TensorTable& table) {
+  auto w = weights_from_table<Net>(table, "test");
   nn::NetworkBatch<Net> batch(w, nn::kBatchMax);
   std::vector<std::vector<float>> x(nn::kBatchMax, std::vector<float>(Net::in_size, 0.5f));
+  for (int i = 0; i < nn::kBatchMax; ++i) x[i][i % Net::in_size] = 0.1f * static_cast<float>(i);
   std::vector<const float*> xp;
   for (auto& v : x) xp.push_back(v.data());
   double sink = 0;
@@ -106,6 +107,15 @@ TEST_CASE("NetworkBatch steps never allocate; sizes outside 1..kBatchMax are ref
     CHECK(c.count() == 0);
   }
   CHECK(std::isfinite(sink));
+}
+
+TEST_CASE("NetworkBatch steps never allocate; sizes outside 1..kBatchMax are refused at construction") {
+  // float, and q8 (the batched int8 kernels: the build's or the CPU's run-time upgrade, nn/int8.hpp)
+  check_batch_never_allocates<GruStack<float, float>>(gru_table());
+  check_batch_never_allocates<GruStack<float, nn::q8>>(gru_table());
+  check_batch_never_allocates<Mlp<float, nn::q8>>(mlp_table());
+  using Net = GruStack<float, float>;
+  auto w = weights_from_table<Net>(gru_table(), "test");
   CHECK_THROWS_AS(nn::NetworkBatch<Net>(w, 0), std::invalid_argument);
   CHECK_THROWS_AS(nn::NetworkBatch<Net>(w, nn::kBatchMax + 1), std::invalid_argument);
 }
