@@ -4,7 +4,8 @@ The standard skeleton is the one of the training data (Bandai Namco, 21 joints f
 skeletons (e.g. CMU) are mapped onto it by joint names (ROLE_NAMES) and scaled by leg length.
 
 Tracker frames (the convention shared with C++ features/calibration.hpp):
-  pelvis   position of the hips joint; orientation W_hips F_local, F_local = the frame built from
+  pelvis   position of the hips joint (where the standard skeleton has it: standard_hips_point; the
+           rig's own root on the training clips); orientation W_hips F_local, F_local = the frame built from
            the rest offsets: Y = up (hips -> first spine joint away from the hips), X = left (left
            minus right thigh root, made orthogonal), Z = X x Y = forward. Rigid with the hips joint,
            so a bending lower back (CMU's LowerBack/Spine) does not tilt it.
@@ -47,6 +48,9 @@ TRACKED = ["head", "hand_l", "hand_r"]          # order of the three joints in t
 # The 8 predicted lower-body joints (paper §3: 8 x 6D), standard-skeleton names.
 LOWER = ["UpperLeg_L", "LowerLeg_L", "Foot_L", "Toes_L", "UpperLeg_R", "LowerLeg_R", "Foot_R", "Toes_R"]
 STANDARD_LEG = ("LowerLeg_L", "Foot_L")          # thigh and shin bones: leg length for height scaling
+# The standard skeleton's hips joint: on the pelvis's up axis, this many leg lengths above the
+# midpoint of the thigh roots (2.19 cm on its 80.07 cm leg). C++ twin: pose/joint_map.hpp.
+STANDARD_HIPS_ABOVE_THIGH_ROOTS = 2.19248 / (39.0811 + 40.9854)
 
 
 def norm_name(n):
@@ -120,6 +124,19 @@ def hips_local_frame(b, roles):
     return frame_from(up, left)
 
 
+def standard_hips_point(b, roles):
+    """Where the standard skeleton's hips joint lies on this rig, hips-local rest coordinates in the
+    file's units: the thigh roots' midpoint plus STANDARD_HIPS_ABOVE_THIGH_ROOTS leg lengths along the
+    pelvis's up axis; zero within 0.6 % of the leg (5 mm) of the rig's own hips joint (every training
+    clip). CMU's root sits at the lower back, ~10 cm above and behind it. C++ twin:
+    pose::standard_hips_point."""
+    h = roles["hips"]
+    leg = leg_length(b, roles)
+    mid = 0.5 * (rest_offset(b, roles["upleg_l"], h) + rest_offset(b, roles["upleg_r"], h))
+    p = mid + hips_local_frame(b, roles)[:, 1] * (STANDARD_HIPS_ABOVE_THIGH_ROOTS * leg)
+    return np.zeros(3) if not np.linalg.norm(p) >= 0.006 * leg or not np.isfinite(p).all() else p
+
+
 def frame_from(up, left):
     y = up / np.linalg.norm(up)
     x = left - np.dot(left, y) * y
@@ -185,6 +202,7 @@ class Clip:
         self.fps = 1.0 / b.frame_time
         self.leg = leg_length(b, self.roles) * self.units
         self.F_local = hips_local_frame(b, self.roles)
+        self.hips_point = standard_hips_point(b, self.roles) * self.units  # the pelvis tracker's place, hips-local
 
     @property
     def frames(self):
@@ -209,7 +227,7 @@ class Clip:
             j = r[role]
             o = self.Rw[t0, j].T @ yaw0
             P[:, k], Q[:, k] = self.pw[:, j], self.Rw[:, j] @ o
-        P[:, 3], Q[:, 3] = self.pw[:, r["hips"]], Fh
+        P[:, 3], Q[:, 3] = self.pw[:, r["hips"]] + self.Rw[:, r["hips"]] @ self.hips_point, Fh
         return P, Q
 
 

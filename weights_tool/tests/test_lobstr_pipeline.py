@@ -221,3 +221,46 @@ def test_z_up_clip_reads_as_y_up(tmp_path):
     assert a.up_turn is None and z.up_turn is not None
     assert np.allclose(z.up_turn @ T, np.eye(3), atol=1e-12)
     assert np.abs(a.pw - z.pw).max() < 1e-9
+
+
+def rig_text(uy, uz):
+    """The rig of tests/pipeline/test_hips_point.cpp: centimetres, leg 40 + 40, thigh roots at
+    (+-8, uy, uz) from the root; frame 1 moved by (10, 0, 5) cm and turned a quarter about Y."""
+    end = "End Site\n{\nOFFSET 0 5 0\n}\n"
+
+    def joint(name, x, y, z, inner):
+        return f"JOINT {name}\n{{\nOFFSET {x} {y} {z}\nCHANNELS 3 Zrotation Xrotation Yrotation\n{inner}}}\n"
+
+    def leg(side):
+        s = "Left" if side > 0 else "Right"
+        return joint(f"{s}UpLeg", 8.0 * side, uy, uz, joint(f"{s}Leg", 0, -40, 0, joint(
+            f"{s}Foot", 0, -40, 0, joint(f"{s}ToeBase", 0, -4, 10, end))))
+    text = ("HIERARCHY\nROOT Hips\n{\nOFFSET 0 0 0\nCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
+            + joint("Spine", 0, 16, 0, joint("Head", 0, 40, 0, end) + joint("LeftHand", 20, 20, 0, end)
+                    + joint("RightHand", -20, 20, 0, end))
+            + leg(1) + leg(-1) + "}\nMOTION\nFrames: 2\nFrame Time: 0.0333333\n")
+    for f in range(2):
+        v = np.zeros(6 + 3 * 12)
+        v[0], v[1], v[2], v[5] = 10.0 * f, 100.0, 5.0 * f, 90.0 * f
+        text += " ".join(repr(float(x)) for x in v) + "\n"
+    return text
+
+
+def test_pelvis_tracker_at_the_standard_hips_joint():
+    """C++ twin: tests/pipeline/test_hips_point.cpp. A rig rooted 10 cm above and 5 cm behind its thigh
+    roots gets its pelvis tracker where the standard skeleton has its hips joint; a rig proportioned
+    like the standard (every training clip) keeps its root exactly."""
+    above = skeleton.STANDARD_HIPS_ABOVE_THIGH_ROOTS * 80.0
+    c = skeleton.Clip(bvh.parse(rig_text(-10.0, 5.0)))
+    assert c.units == 0.01
+    np.testing.assert_allclose(c.hips_point, [0.0, (-10.0 + above) * 0.01, 0.05], atol=1e-12)
+    P, _ = c.trackers()  # in the clip's world (no floor shift): root at (0, 1, 0) m, then (0.1, 1, 0.05) turned
+    np.testing.assert_allclose(P[0, 3], [0.0, 1.0 + (-10.0 + above) * 0.01, 0.05], atol=1e-9)
+    np.testing.assert_allclose(P[1, 3], [0.15, 1.0 + (-10.0 + above) * 0.01, 0.05], atol=1e-9)
+    s = skeleton.Clip(bvh.parse(rig_text(-above, 0.0)))
+    assert (s.hips_point == 0).all()
+    P, _ = s.trackers()
+    assert (P[:, 3] == s.pw[:, s.roles["hips"]]).all()
+    near = skeleton.Clip(bvh.parse(rig_text(-above + 0.4, 0.0)))   # within 0.6 % of the leg: kept
+    far = skeleton.Clip(bvh.parse(rig_text(-above + 0.6, 0.0)))
+    assert (near.hips_point == 0).all() and abs(far.hips_point[1] - 0.006) < 1e-9

@@ -79,13 +79,14 @@ inline double arm_length(const Skeleton& s, int hand) noexcept {
 }
 
 // The segment-group lengths the ratios compare (any units): leg = thigh + shin (leg_length), torso
-// = the rest distance from the hips to the head, arm = upper arm + forearm (left side).
+// = the rest distance from the hips joint (where the standard skeleton has it: standard_hips_point)
+// to the head, arm = upper arm + forearm (left side).
 struct BodyLengths {
   double leg = 0, torso = 0, arm = 0;
   static BodyLengths of(const Skeleton& s, const JointMap& m) noexcept {
     BodyLengths b;
     b.leg = leg_length(s, m);
-    b.torso = rest_offset(s, m[Role::Head], m[Role::Hips]).norm();
+    b.torso = (rest_offset(s, m[Role::Head], m[Role::Hips]) - standard_hips_point(s, m)).norm();
     b.arm = arm_length(s, m[Role::HandL]);
     return b;
   }

@@ -140,4 +140,24 @@ inline Eigen::Matrix3d hips_tracker_frame(const Skeleton& s, const JointMap& m) 
                        rest_offset(s, m[Role::UpLegL], h) - rest_offset(s, m[Role::UpLegR], h));
 }
 
+// The standard skeleton's hips joint (the training data's, Bandai Namco's) sits on the pelvis's up
+// axis 0.0274 leg lengths above the midpoint of the thigh roots (2.19 cm on its 80.07 cm thigh +
+// shin), neither forward nor back. Rigs differ: CMU's root "Hips" is 10.8 cm above that midpoint and
+// 3.9 cm behind it, at the lower back. Python twin: skeleton.STANDARD_HIPS_ABOVE_THIGH_ROOTS.
+inline constexpr double kStandardHipsAboveThighRoots = 2.19248 / (39.0811 + 40.9854);
+
+// Where the standard skeleton's hips joint lies on this rig, in hips-local rest coordinates (the
+// rig's units): the midpoint of the thigh roots plus kStandardHipsAboveThighRoots leg lengths along
+// the pelvis's up axis (hips_tracker_frame). Zero where that is within 0.6 % of the leg (5 mm) of the
+// rig's own hips joint (every training clip: their trackers stay bit for bit), so that a pelvis
+// tracker synthesised "at the hips" of another rig sits where the avatar's hips joint belongs, and
+// its torso is measured from there. Python twin: skeleton.standard_hips_point.
+inline Eigen::Vector3d standard_hips_point(const Skeleton& s, const JointMap& m) noexcept {
+  const int h = m[Role::Hips];
+  const double leg = leg_length(s, m);
+  const Eigen::Vector3d mid = 0.5 * (rest_offset(s, m[Role::UpLegL], h) + rest_offset(s, m[Role::UpLegR], h));
+  const Eigen::Vector3d p = mid + hips_tracker_frame(s, m).col(1) * (kStandardHipsAboveThighRoots * leg);
+  return !(p.norm() >= 0.006 * leg) || !p.allFinite() ? Eigen::Vector3d::Zero() : p;
+}
+
 }  // namespace sparsebody::pose

@@ -1,5 +1,7 @@
 // Synthetic trackers from mocap (training data, demos, tests): headset at the head joint,
-// controllers at the hand joints, pelvis tracker at the hips joint. Python twin:
+// controllers at the hand joints, pelvis tracker at the hips joint (where the standard skeleton has
+// it: pose::standard_hips_point, the rig's own root on every training clip; another rig's root,
+// CMU's at the lower back, would put the avatar's hips ~10 cm too high and back). Python twin:
 // weights_tool/lobstr/skeleton.py Clip.trackers (keep equal; the parity test checks it).
 //   pelvis orientation = W_hips(t) F_local, F_local = hips_tracker_frame (rest geometry: Y up to
 //                        spine_base, X left, Z forward), rigid with the hips joint (pose/joint_map.hpp)
@@ -59,6 +61,7 @@ inline SyntheticTrackers synthesize_trackers(const BvhClip& clip, const pose::Jo
   pose::WorldPose w;
   w.resize(s.size());
   const Eigen::Matrix3d F_local = pose::hips_tracker_frame(s, m);
+  const Eigen::Vector3d hips_point = pose::standard_hips_point(s, m) * units;  // hips-local, metres
   const int joints[3] = {m[Role::Head], m[Role::HandL], m[Role::HandR]};
   std::vector<double> toe_y;
   Eigen::Matrix3d o[3];
@@ -77,7 +80,7 @@ inline SyntheticTrackers synthesize_trackers(const BvhClip& clip, const pose::Jo
       t.pose[k].orientation = to_xr(Eigen::Quaterniond(w.rotation[joints[k]].toRotationMatrix() * o[k]));
       t.valid[k] = true;
     }
-    t.pose[3].position = to_xr(w.position[m[Role::Hips]]);
+    t.pose[3].position = to_xr(Eigen::Vector3d(w.position[m[Role::Hips]] + w.rotation[m[Role::Hips]] * hips_point));
     t.pose[3].orientation = to_xr(Eigen::Quaterniond(Fh));
     t.valid[3] = true;
     toe_y.push_back(w.position[m[Role::ToeL]].y());
