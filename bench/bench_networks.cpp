@@ -265,6 +265,39 @@ void bench_singles(benchmark::State& st, io::TensorTable table, const char* kind
                                                                        benchmark::Counter::kInvert);
 }
 
+// One q8 product shape, 16 instances: detail::gemv_batch_q8_upgrade (groups of instances share each
+// weight load) against 16 single products, with upgrade u (none: the build's kernel). Rows
+// "q8_group/<kernel>/<rows>x<cols>/{batch,singles}": how much the grouping of nn/int8.hpp pays for
+// each kernel the CPU runs, on the products of the paper networks.
+void bench_q8_group(benchmark::State& st, nn::detail::Q8Upgrade u, int rows, int cols, bool batch) {
+  constexpr int n = 16;
+  std::mt19937 rng(9);
+  std::normal_distribution<float> d(0, 1);
+  std::vector<float> dense(static_cast<std::size_t>(rows) * cols);
+  for (float& v : dense) v = d(rng);
+  AlignedBuffer<std::int8_t> q(static_cast<std::size_t>(nn::padded<float>(rows)) * 4 * nn::q8_groups(cols));
+  AlignedBuffer<float> scale(nn::padded<float>(rows));
+  AlignedBuffer<std::int32_t> sum(nn::padded<float>(rows));
+  nn::pack_q8(dense.data(), rows, cols, q.data(), scale.data(), sum.data(), rows);
+  const nn::PanelMatrix<float, nn::q8> W{q.data(), scale.data(), sum.data(), rows, cols};
+  std::vector<std::vector<float>> x(n, std::vector<float>(cols)), y(n, std::vector<float>(nn::padded<float>(rows)));
+  std::vector<const float*> xp;
+  std::vector<float*> yp;
+  for (int i = 0; i < n; ++i) {
+    for (float& v : x[i]) v = d(rng);
+    xp.push_back(x[i].data());
+    yp.push_back(y[i].data());
+  }
+  for (auto _ : st) {
+    if (batch)
+      nn::detail::gemv_batch_q8_upgrade(u, W, n, xp.data(), nullptr, yp.data());
+    else
+      for (int i = 0; i < n; ++i) nn::detail::gemv_q8_upgrade(u, W, xp[i], nullptr, yp[i]);
+    benchmark::ClobberMemory();
+  }
+  st.counters["GMAC/s"] = benchmark::Counter(double(n) * rows * cols * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+}
+
 // Loading the paper-size LoBSTr model (37->1024 GRU, 13 MB of float32) from weights JSON text.
 void BM_LoadLoBSTr1024(benchmark::State& st) {
   const bool base64 = st.range(0) == 1;
@@ -367,6 +400,26 @@ void register_all() {
   SB_BATCH("N3P_Gup_H128_q8weights", GupQ8, n3p_table(45, 128, 201), "n3p_upper")
   SB_BATCH("QuestSim_475_400_300_200_33_q8weights", QuestSimQ8, mlp_table({475, 400, 300, 200, 33}), "questsim_policy")
 #undef SB_BATCH
+  // Grouping of q8 batches per kernel this CPU runs (the build's, and each run-time upgrade it has):
+  // the gate products of the LoBSTr / GRU 256 and N3P Gup hidden layers and QuestSim's first layer.
+  {
+    using nn::detail::Q8Upgrade;
+    std::vector<std::pair<Q8Upgrade, std::string>> kernels{{Q8Upgrade::none, "build"}};
+    for (Q8Upgrade u : nn::detail::kQ8UpgradeOrder)
+      if (nn::detail::q8_cpu_has(u)) kernels.emplace_back(u, u == Q8Upgrade::avx_vnni ? "avx_vnni" : u == Q8Upgrade::avx512vl_vnni ? "avx512vl_vnni" : "neon_dot");
+    for (const auto& [u, kname] : kernels)
+      for (const auto& [rows, cols] : {std::pair{768, 256}, std::pair{384, 128}, std::pair{400, 475}}) {
+        const std::string base = "q8_group/" + kname + "/" + std::to_string(rows) + "x" + std::to_string(cols);
+        for (bool b : {true, false}) {
+          const Q8Upgrade uu = u;
+          const int r = rows, c = cols;
+          benchmark::RegisterBenchmark((base + (b ? "/batch" : "/singles")).c_str(),
+                                       [uu, r, c, b](benchmark::State& s) { bench_q8_group(s, uu, r, c, b); })
+              ->Unit(benchmark::kMicrosecond);
+        }
+        add_ratio("q8 16 singles / grouped batch " + base.substr(9), base + "/singles", base + "/batch");
+      }
+  }
   // The most int8 can gain over float where both are bound by arithmetic (weights in L1/L2): the
   // same 1 M multiply-adds as float FMAs and as the q8 kernel's int8 instructions.
   for (int i8 = 0; i8 < 2; ++i8)
