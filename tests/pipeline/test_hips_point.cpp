@@ -25,12 +25,12 @@ std::string joint(const char* name, double x, double y, double z, const std::str
   return s.str();
 }
 
-// A rig in centimetres (leg 40 + 40) whose thigh roots sit at (+-8, uy, uz) from its root; two
+// A rig in centimetres (leg 40 + 40) whose thigh roots sit at (+-ux, uy, uz) from its root; two
 // frames, the second moved by (10, 0, 5) cm and turned a quarter about Y.
-std::string rig(double uy, double uz) {
+std::string rig(double uy, double uz, double ux = 8.0) {
   const std::string end = "End Site\n{\nOFFSET 0 5 0\n}\n";
   auto leg = [&](bool left) {
-    return joint(left ? "LeftUpLeg" : "RightUpLeg", left ? 8.0 : -8.0, uy, uz,
+    return joint(left ? "LeftUpLeg" : "RightUpLeg", left ? ux : -ux, uy, uz,
                  joint(left ? "LeftLeg" : "RightLeg", 0, -40, 0,
                        joint(left ? "LeftFoot" : "RightFoot", 0, -40, 0,
                              joint(left ? "LeftToeBase" : "RightToeBase", 0, -4, 10, end))));
@@ -98,5 +98,15 @@ TEST_CASE("pelvis tracker at the standard hips joint: a rig rooted at the lower 
     const pose::JointMap m = pose::JointMap::from_names(near.skeleton, "rig.bvh");
     CHECK(pose::standard_hips_point(near.skeleton, m) == Eigen::Vector3d::Zero());
     CHECK(pose::standard_hips_point(far.skeleton, m).y() == doctest::Approx(0.6).epsilon(1e-4));  // the text keeps 6 digits
+  }
+  SUBCASE("a degenerate rig (both thigh roots at one point: no left axis) still gets a finite point") {
+    // Only the pelvis's up axis (towards the spine) places the point, so the answer is the CMU-like one.
+    const recordings::BvhClip clip = parse(rig(-10.0, 5.0, 0.0));
+    const pose::JointMap m = pose::JointMap::from_names(clip.skeleton, "rig.bvh");
+    const Eigen::Vector3d p = pose::standard_hips_point(clip.skeleton, m);
+    REQUIRE(p.allFinite());
+    CHECK(p.y() == doctest::Approx(-10.0 + above).epsilon(1e-12));
+    CHECK(p.z() == doctest::Approx(5.0).epsilon(1e-12));
+    CHECK(std::isfinite(pose::BodyLengths::of(clip.skeleton, m).torso));
   }
 }
