@@ -24,6 +24,7 @@
 #include <benchmark/benchmark.h>
 
 #include "compute_limit.hpp"
+#include "nn/packed_q8.hpp"
 #include "nn/random_tables.hpp"
 #include "ratio_report.hpp"
 #include "sparsebody/core/aligned_buffer.hpp"
@@ -275,11 +276,8 @@ void bench_q8_group(benchmark::State& st, nn::detail::Q8Upgrade u, int rows, int
   std::normal_distribution<float> d(0, 1);
   std::vector<float> dense(static_cast<std::size_t>(rows) * cols);
   for (float& v : dense) v = d(rng);
-  AlignedBuffer<std::int8_t> q(static_cast<std::size_t>(nn::padded<float>(rows)) * 4 * nn::q8_groups(cols));
-  AlignedBuffer<float> scale(nn::padded<float>(rows));
-  AlignedBuffer<std::int32_t> sum(nn::padded<float>(rows));
-  nn::pack_q8(dense.data(), rows, cols, q.data(), scale.data(), sum.data(), rows);
-  const nn::PanelMatrix<float, nn::q8> W{q.data(), scale.data(), sum.data(), rows, cols};
+  const sparsebody_test::PackedQ8 packed(dense, rows, cols);
+  const nn::PanelMatrix<float, nn::q8>& W = packed.m;
   std::vector<std::vector<float>> x(n, std::vector<float>(cols)), y(n, std::vector<float>(nn::padded<float>(rows)));
   std::vector<const float*> xp;
   std::vector<float*> yp;

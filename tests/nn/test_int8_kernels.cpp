@@ -16,6 +16,7 @@
 
 #include "sparsebody/core/aligned_buffer.hpp"
 #include "sparsebody/nn/int8.hpp"
+#include "nn/packed_q8.hpp"
 #include "sparsebody/nn/storage.hpp"
 
 using namespace sparsebody;
@@ -25,20 +26,7 @@ namespace {
 
 constexpr Q8Kernel kAll[] = {Q8Kernel::avx512_vnni, Q8Kernel::avx_vnni, Q8Kernel::avx2, Q8Kernel::neon_dot, Q8Kernel::neon};
 
-// A packed q8 matrix owning its storage, as ParamBinder lays it out.
-struct Packed {
-  AlignedBuffer<std::int8_t> q;
-  AlignedBuffer<float> scale;
-  AlignedBuffer<std::int32_t> sum;
-  nn::PanelMatrix<float, nn::q8> m;
-  Packed(const std::vector<float>& w, int rows, int cols)
-      : q(static_cast<std::size_t>(nn::padded<float>(rows)) * 4 * nn::q8_groups(cols)),
-        scale(nn::padded<float>(rows)),
-        sum(nn::padded<float>(rows)) {
-    nn::pack_q8(w.data(), rows, cols, q.data(), scale.data(), sum.data(), rows);
-    m = {q.data(), scale.data(), sum.data(), rows, cols};
-  }
-};
+using Packed = sparsebody_test::PackedQ8;  // a packed q8 matrix owning its storage (nn/packed_q8.hpp)
 
 // kind 0: N(0,1); 1: +-1 only (every Q or q at +-127); 2: mixed, half the entries at +-1.
 float draw(std::mt19937& rng, int kind) {
