@@ -8,7 +8,9 @@
 //     h_rest = the joint's height in the skeleton's standing pose (so a foot flat on the floor
 //     scores 0 in both modes), and the worst frame;
 //   physics only: residual root force / torque (mean and max over all 120 Hz steps), falls,
-//     failed steps, and the simulated body's own deepest point below the floor (mm).
+//     failed steps, and the simulated body's own deepest point below the floor (mm); the force's
+//     mean vertical (signed: + holds the body up) and horizontal parts, sampled at the last
+//     simulation step of each output frame.
 // Physics mode is 0.1 s behind its input; by default its output is compared with the ground truth
 // of the frame it reproduces (output_frame(), the paper's "shift forward by 0.1 s", §8.4-8.5);
 // --no-shift compares with the current frame instead.
@@ -17,8 +19,9 @@
 //     [--feedforward SCALE] [--correction-kp X] [--target-lead FRAMES] [--hold-targets 0|1] [--contact-passes N]
 //     [--stance-support 0|1] [--support-moment 0|1] [--support-on-contact 0|1]
 //     [--velocity-targets 0|1] [--acceleration SCALE] [--ground-reference 0|1] [--ground-resets 0|1]
-//     [--correction FILE]
-// (each overrides one field of N3PPhysicsConfig / ModelBasedControllerConfig; the README's table of
+//     [--kp X] [--kd X] [--torque-limit NM] [--correction FILE]
+// (each overrides one field of N3PPhysicsConfig / ModelBasedControllerConfig / AvatarOptions (--kp,
+// --kd, --torque-limit: the joint servos, paper §7's 200 / 20); the README's table of
 // the default with each part turned off is made with them). --correction adds a learned correction
 // of the PD targets (N3PPhysicsPipeline::set_correction_policy; weights_tool.questsim.train --task n3p).
 #include <algorithm>
@@ -81,7 +84,8 @@ Options parse_options(int argc, char** argv) {
     double lead = cc.target_lead, hold = 0;
     if (num("--root-kp", cc.kp_linear) || num("--root-kd", cc.kd_linear) || num("--root-kr", cc.kp_angular) ||
         num("--root-dr", cc.kd_angular) || num("--max-force", cc.max_force) || num("--max-torque", cc.max_torque) ||
-        num("--feedforward", cc.feedforward_scale) || num("--correction-kp", cfg.correction.kp))
+        num("--feedforward", cc.feedforward_scale) || num("--correction-kp", cfg.correction.kp) || num("--kp", cfg.avatar.kp) || num("--kd", cfg.avatar.kd) ||
+        num("--torque-limit", cfg.avatar.torque_limit))
       continue;
     double sup = 1;
     if (num("--stance-support", sup)) { cc.stance_support = sup != 0; continue; }
@@ -231,6 +235,8 @@ struct Totals {
   double sim_pen = 0, sim_pen_max = 0;
   long sim_n = 0, falls = 0, failures = 0, clips = 0, by[4] = {};
   control::ResidualStats residual;
+  double force_up = 0, force_horizontal = 0;  // sums of the residual force's parts, one sample per output frame
+  long force_samples = 0;
 };
 
 // One clip through a fresh physics pipeline: direct and physics output scored, the physics
@@ -244,6 +250,12 @@ void evaluate_clip(const nlohmann::json& c, const Physics::Weights& w, const std
   ClipScorer direct(c, dump, feet, p.skeleton(), tot.direct), physics(c, dump, feet, p.skeleton(), tot.physics);
   for (int t = 0; t < F; ++t) {
     p.push(recordings::n3p_dump_frame(c, t));
+    if (p.has_output()) {  // the root servo's force at the frame's last simulation step (world)
+      const auto F = p.simulator().root_servo_force();
+      tot.force_up += double(F.y());
+      tot.force_horizontal += std::hypot(double(F.x()), double(F.z()));
+      ++tot.force_samples;
+    }
     if (p.direct().has_output()) direct.score(p.direct().world(), t);
     if (!p.has_output()) continue;
     // The frame the physics output reproduces (its restarts counted from its own start).
@@ -273,6 +285,9 @@ void print_summary(const Totals& tot, const Options& o) {
               rs.force_mean(), rs.force_max, rs.torque_mean(), rs.torque_max, rs.steps, tot.falls, tot.by[1], tot.by[2], tot.by[3],
               tot.falls / std::max(1e-9, tot.physics.n / 30.0 / 60.0), tot.failures, 1000 * tot.sim_pen / std::max(1L, tot.sim_n),
               1000 * tot.sim_pen_max);
+  const double n = std::max(1L, tot.force_samples);
+  std::printf("physics: residual force at each frame's last step: vertical mean %.1f N (+ up), horizontal mean %.1f N\n",
+              tot.force_up / n, tot.force_horizontal / n);
 }
 
 }  // namespace
