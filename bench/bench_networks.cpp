@@ -9,8 +9,7 @@
 // Run: build/bench/bench_networks --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 // The storage table (float / f16 / q8 for every paper network, speed-ups printed at the end), e.g.
 // for a -DSPARSEBODY_MARCH=x86-64-v3 build beside the native one:
-//   build/bench/bench_networks --benchmark_filter='^sparsebody/' --benchmark_repetitions=5 \
-//       --benchmark_report_aggregates_only=true
+//   build/bench/bench_networks --benchmark_filter='^sparsebody/' --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -404,7 +403,7 @@ void register_all() {
     using nn::detail::Q8Upgrade;
     std::vector<std::pair<Q8Upgrade, std::string>> kernels{{Q8Upgrade::none, "build"}};
     for (Q8Upgrade u : nn::detail::kQ8UpgradeOrder)
-      if (nn::detail::q8_cpu_has(u)) kernels.emplace_back(u, u == Q8Upgrade::avx_vnni ? "avx_vnni" : u == Q8Upgrade::avx512vl_vnni ? "avx512vl_vnni" : "neon_dot");
+      if (nn::detail::q8_cpu_has(u)) kernels.emplace_back(u, nn::detail::q8_upgrade_id(u));
     for (const auto& [u, kname] : kernels)
       for (const auto& [rows, cols] : {std::pair{768, 256}, std::pair{384, 128}, std::pair{400, 475}}) {
         const std::string base = "q8_group/" + kname + "/" + std::to_string(rows) + "x" + std::to_string(cols);

@@ -721,6 +721,15 @@ constexpr const char* q8_upgrade_name(Q8Upgrade u) {
     default: return "none";
   }
 }
+// The same as an identifier (benchmark row names, logs): the enumerator's own name.
+constexpr const char* q8_upgrade_id(Q8Upgrade u) {
+  switch (u) {
+    case Q8Upgrade::avx_vnni: return "avx_vnni";
+    case Q8Upgrade::avx512vl_vnni: return "avx512vl_vnni";
+    case Q8Upgrade::neon_dot: return "neon_dot";
+    default: return "none";
+  }
+}
 
 // Whether this CPU runs upgrade u (and this build has it); the environment plays no part.
 inline bool q8_cpu_has(Q8Upgrade u) noexcept {
