@@ -262,7 +262,7 @@ TEST_CASE("QuestSim torque limits: per joint by default, scaled with the avatar;
 
 // The shipped policy (trained with PPO on this machine's CPUs, issue 14; README "Training the QuestSim
 // policy") against random weights on the same 20 s swaying, turning, waving user: it must keep the
-// character up far longer. (Through the pipeline on all 301 validation clips it falls ~40 times a
+// character up far longer. (Through the pipeline on all 301 validation clips it falls ~17 times a
 // minute: a weak policy, shipped because it falls less than the model-based controller without help.)
 TEST_CASE("QuestSim: the shipped trained policy falls far less than random weights on a moving user") {
   auto run = [](const std::shared_ptr<const Ctl::Weights>& w) {

@@ -10,7 +10,10 @@ Per clip and in the summary (frames weighted):
                     the same name at the user time the character tracks (latency removed)
   mpjpe_output_cm   the same against the user's pose at the newest input time (as a user sees it)
   falls_per_min     Fall events per minute of input (each resets the character under the headset),
-                    plus simulation failures
+                    from the pipeline's own counter (QuestSim.summary()); simulation failures apart.
+                    (Before 2026-12-07 this counted the per-frame `event` array, which repeats a tick's
+                    event on the input frames that run no tick: at 72 Hz input and 36 Hz ticks, every
+                    fall twice.)
   skate_cm_s        horizontal speed of the lower foot (Foot_L/R origin) while it is within 5 cm of the
                     floor, averaged over frames
   penetration_cm    mean depth of the lowest body origin below the floor (0 when above)
@@ -36,13 +39,24 @@ def load_sb():
     return sb
 
 
-def evaluate_clip(sb, policy, path):
-    inp = sb.read_input(path, devices=True)
+def run_policy(sb, policy, inp):
+    """The pipeline on one session (read_input's dict), the avatar sized to the user: returns the
+    pipeline, its run() output, the height and the session's falls and simulation failures. `event`
+    holds the last tick's event on every input frame, also on frames that run no tick, so events are
+    counted by the pipeline's counters (summary()), not from that array."""
     t, P, Q, V = inp["time"], inp["position"], inp["orientation"], inp["valid"]
     first = t <= t[0] + 1.0
     h = float(np.median(P[first & V[:, 0], 0, 1])) / 0.936
     q = sb.QuestSim(policy, h)
     out = q.run(t, P, Q, V)
+    summary = q.summary()
+    return q, out, h, int(summary["falls"]), int(summary["simulation_failures"])
+
+
+def evaluate_clip(sb, policy, path):
+    inp = sb.read_input(path, devices=True)
+    t = inp["time"]
+    q, out, h, falls, failures = run_policy(sb, policy, inp)
     names = q.bodies
     jn = inp["truth_joints"]
     idx = [jn.index(n) for n in names]
@@ -57,6 +71,8 @@ def evaluate_clip(sb, policy, path):
         return (1 - a) * truth[f0] + a * truth[f1]
 
     ticked = (out["ticks"] > 0) & np.isfinite(out["tracked_time"])
+    # `event` holds the last tick's event on every input frame, also on frames that run no tick, so
+    # events are counted by the pipeline's counters and placed in time on the frames that ticked.
     ev = out["event"]
     B = out["body_position"][ticked]
     tt = out["tracked_time"][ticked]
@@ -78,8 +94,8 @@ def evaluate_clip(sb, policy, path):
     minutes = res["input_s"] / 60
     res.update({
         "mpjpe_cm": 100 * float(err.mean()), "mpjpe_output_cm": 100 * float(err_out.mean()),
-        "falls": int((ev == 5).sum()), "simulation_failures": int((ev == 4).sum()),
-        "falls_per_min": float((ev == 5).sum() / max(minutes, 1e-9)),
+        "falls": falls, "simulation_failures": failures,
+        "falls_per_min": float(falls / max(minutes, 1e-9)),
         "skate_cm_s": 100 * float(v[near].mean()) if near.any() else 0.0,
         "penetration_cm": 100 * float(np.maximum(0, -B[:, :, 1].min(1)).mean()),
         "jitter_m_s3": float(np.linalg.norm(jerk, axis=2).mean() * 36.0 ** 3) if len(jerk) else 0.0,

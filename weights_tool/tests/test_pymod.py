@@ -411,6 +411,23 @@ def test_questsim_with_explicit_weights(sb, tmp_path):
         sb.QuestSim("/nowhere.json", 1.75)
 
 
+def test_questsim_evaluation_counts_each_fall_once(sb):
+    """QuestSim.run's `event` repeats a tick's event on the input frames that run no tick (72 Hz input,
+    36 Hz ticks), so counting it over all frames counted every fall twice; the evaluation's count
+    (evaluate.run_policy) equals the Fall events of the frames that ticked."""
+    need_clip()
+    from weights_tool.questsim import evaluate
+    policy = os.path.join(ROOT, "examples", "weights", "questsim_policy.json")
+    inp = sb.read_input(CLIP, devices=True)
+    _, out, _, falls, failures = evaluate.run_policy(sb, policy, inp)
+    ticked = out["ticks"] > 0
+    assert out["ticks"].max() == 1  # one tick at most per frame: the ticking frames hold every event
+    assert falls > 0  # the CMU playground clip makes the shipped policy fall
+    assert falls == int((out["event"][ticked] == 5).sum())
+    assert failures == int((out["event"][ticked] == 4).sum())
+    assert int((out["event"] == 5).sum()) == 2 * falls  # what counting every frame gave
+
+
 def test_one_batch_at_a_time_per_pipeline(sb):
     """A second thread calling run() on a pipeline that is mid-batch gets RuntimeError; an empty
     batch is a no-op (so probing changes nothing)."""
