@@ -660,7 +660,8 @@ PYBIND11_MODULE(sparsebody, m) {
              return std::make_unique<QuestSim>(w, h);
            }), py::arg("weights"), py::arg("height"))
       .def("run", &QuestSim::run_py, py::arg("time"), py::arg("position"), py::arg("orientation"), py::arg("valid"),
-           py::arg("strict") = true, "As Pipeline.run; returns body_position [T,B,3], body_rotation [T,B,4], tracked_time, ticks, event.")
+           py::arg("strict") = true, "As Pipeline.run; returns body_position [T,B,3], body_rotation [T,B,4], tracked_time, ticks, event "
+           "(the last tick's QuestSimEvent, repeated on frames with ticks == 0: count falls with summary() or where ticks > 0).")
       .def_property_readonly("bodies", &QuestSim::bodies)
       .def("summary", &QuestSim::summary)
       .def("reset", &QuestSim::reset);
