@@ -75,6 +75,9 @@ void print_calibration(const Options& o, const Input& in, const Pipeline& pipe) 
     if (r.windows > 1) std::printf(", %d windows averaged", r.windows);
     if (r.skipped > 0) std::printf(", %d lower (sitting?) not used", r.skipped);
     if (r.refused > 0) std::printf(", %d implausible not used", r.refused);
+    if (r.grip_default[0] || r.grip_default[1])  // e.g. lying on a table at every stand (max_grip_deviation)
+      std::printf(", %s not seen held at a stand (the device model's grip)",
+                  r.grip_default[0] && r.grip_default[1] ? "both controllers" : r.grip_default[0] ? "the left controller" : "the right controller");
     if (r.floor_estimated)
       std::printf(", floor estimated at y = %.2f m%s", r.floor,
                   r.floor_not_at_zero ? " (the standing eye height is below 0.5 m: y = 0 is not the floor)" : "");

@@ -22,6 +22,9 @@ against the clip that drove it, the same way for every input path:
            72 Hz stream, positions sigma 0.3 mm (headset) / 1 mm (controllers, belt), orientations
            0.2 deg per axis (add_tracking_noise; sub-millimetre static jitter is what headsets and
            controllers show, and a network fed velocities sees it amplified by the frame rate)
+  table    devices through the CSV path, the session starting before the user picks the controllers
+           up: 3 s standing (the first frame held) with both controllers lying flat on a table 0.45 m
+           ahead at 0.76 m, a 0.5 s pick-up, then the devices session (controllers_on_a_table)
   cmu      the CMU clips of Debian's assimp-testmodels (another performer, another skeleton)
 
 Metrics (12 joints mapped by role: hips, head, hands, thighs, knees, ankles, toes; metres -> cm):
@@ -182,7 +185,8 @@ def run_demo(demo, src, out, model, extra, trackers_out=None):
 
 
 DEVICES = ["--devices", "--devices-stand", "0"]  # a session that starts with the user standing 2.5 s
-CSV_MODES = ("csv", "csvstop", "swapped", "noisy")
+CSV_MODES = ("csv", "csvstop", "swapped", "noisy", "table")
+TABLE_SECONDS, PICKUP_SECONDS = 3.0, 0.5  # table mode: controllers on the table, then picked up
 NOISE_POSITION = (0.0003, 0.001, 0.001, 0.001)  # m, sigma per axis: headset, left, right, belt
 NOISE_ORIENTATION = np.radians(0.2)              # rad, sigma per axis
 
@@ -216,6 +220,56 @@ def add_tracking_noise(path, seed):
             f.write(",".join(str(int(v)) if i in valid else f"{v:.9g}" for i, v in enumerate(r)) + "\n")
 
 
+def _qmul(a, b):
+    """Quaternion products a b of [..., 4] arrays, x y z w."""
+    x1, y1, z1, w1 = np.moveaxis(a, -1, 0)
+    x2, y2, z2, w2 = np.moveaxis(b, -1, 0)
+    return np.stack([w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2, w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+                     w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2, w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2], axis=-1)
+
+
+def controllers_on_a_table(path, seconds=TABLE_SECONDS, pickup=PICKUP_SECONDS, rate=72.0):
+    """Prepends to a tracker CSV `seconds` of its first sample's headset (and belt) held, with both
+    controllers lying flat on a table (a quarter turn about the world X axis from their first
+    orientation) 0.45 m ahead of the headset and 0.15 m to each side at 0.76 m, then a smoothstep
+    pick-up of `pickup` s to their first sample; the session's own samples follow, time-shifted."""
+    with open(path) as f:
+        lines = f.readlines()
+    h = next(k for k, l in enumerate(lines) if not l.startswith("#"))
+    cols = lines[h].strip().split(",")
+    rows = np.array([[float(x) for x in l.strip().split(",")] for l in lines[h + 1:] if l.strip()])
+    c = {n: i for i, n in enumerate(cols)}
+    r0 = rows[0]
+    head = r0[[c["head_px"], c["head_py"], c["head_pz"]]]
+    x, y, z, w = r0[[c["head_qx"], c["head_qy"], c["head_qz"], c["head_qw"]]]
+    fwd = -np.array([2 * (x * z + w * y), 0.0, 1 - 2 * (x * x + y * y)])  # the headset's -Z, horizontal
+    fwd /= np.linalg.norm(fwd)
+    right = np.array([-fwd[2], 0.0, fwd[0]])
+    flat = np.array([np.sin(np.pi / 4), 0.0, 0.0, np.cos(np.pi / 4)])
+    n_table, n_pick = int(round(seconds * rate)), int(round(pickup * rate))
+    pre = np.repeat(r0[None], n_table + n_pick, axis=0)
+    a = np.clip((np.arange(n_table + n_pick) - n_table + 1) / (n_pick + 1), 0, 1)[:, None]
+    a = a * a * (3 - 2 * a)
+    for side, sign in (("left_hand", -1), ("right_hand", 1)):
+        P = [c[f"{side}_p{k}"] for k in "xyz"]
+        Q = [c[f"{side}_q{k}"] for k in "xyzw"]
+        tp = head + 0.45 * fwd + sign * 0.15 * right
+        tp[1] = 0.76
+        tq = _qmul(flat, r0[Q])
+        q0 = r0[Q] * np.sign(np.dot(tq, r0[Q]))
+        pre[:, P] = (1 - a) * tp + a * r0[P]
+        q = (1 - a) * tq + a * q0
+        pre[:, Q] = q / np.linalg.norm(q, axis=1, keepdims=True)
+    pre[:, 0] = r0[0] + (np.arange(len(pre)) - len(pre)) / rate
+    rows = np.vstack([pre, rows])
+    rows[:, 0] -= rows[0, 0]
+    valid = [i for i, n in enumerate(cols) if n.endswith("_valid")]
+    with open(path, "w") as f:
+        f.writelines(lines[:h + 1])
+        for r in rows:
+            f.write(",".join(str(int(v)) if i in valid else f"{v:.9g}" for i, v in enumerate(r)) + "\n")
+
+
 def swap_hand_columns(path):
     """Exchanges the left and right controllers of a tracker CSV by renaming its header's columns."""
     with open(path) as f:
@@ -235,7 +289,7 @@ def mode_inputs(mode, val_dir, every, tmp):
         return files, DEVICES, files
     if mode in ("csv", "csvstop"):  # the user walks from the first frame and stands half-way through the clip
         return files, ["--devices"], files
-    if mode in ("swapped", "noisy"):
+    if mode in ("swapped", "noisy", "table"):
         return files, DEVICES, files
     if mode == "cmu":
         return [f for f in CMU if os.path.exists(f)], [], [f for f in CMU if os.path.exists(f)]
@@ -283,6 +337,8 @@ def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None, sb=No
             opts_c += ["--device-seed", str(1000 + ci)]  # a different user and devices per clip
             if "--devices-stand" in opts_c:
                 hold = (float(opts_c[opts_c.index("--devices-stand") + 1]), 2.5)
+            if mode == "table":  # the table and the pick-up hold the first frame too
+                hold = (0.0, 2.5 + TABLE_SECONDS + PICKUP_SECONDS)
         csv = os.path.join(tmp, "session.csv")
         if mode in ("csv", "csvstop"):
             half = double_support_near_half(s) if mode == "csvstop" else 0.5 * Clip(s).frames / 30.0
@@ -297,6 +353,8 @@ def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None, sb=No
                     swap_hand_columns(csv)
                 if mode == "noisy":
                     add_tracking_noise(csv, 1000 + ci)
+                if mode == "table":
+                    controllers_on_a_table(csv)
                 rc, res = module_run(sb, csv, model, extra)
             else:
                 rc, res = module_run(sb, s, model, opts_c + extra)
@@ -314,6 +372,8 @@ def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None, sb=No
                     swap_hand_columns(csv)
                 if mode == "noisy":
                     add_tracking_noise(csv, 1000 + ci)
+                if mode == "table":
+                    controllers_on_a_table(csv)
                 rc, log = run_demo(demo, csv, out, model, extra)
             else:
                 rc, log = run_demo(demo, s, out, model, opts_c + extra)

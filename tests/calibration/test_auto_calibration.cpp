@@ -235,6 +235,76 @@ TEST_CASE("auto calibration: no raise for a jump, a walk at the stand's height, 
   }
 }
 
+namespace {
+// The controllers lie on a table while the user stands (a session that starts before the user
+// picks them up): flat (a quarter turn about the user's left axis), 0.45 m ahead at 0.76 m.
+void put_controllers_on_a_table(std::vector<trackers::TrackerFrame>& frames) {
+  const Eigen::Quaterniond q = trackers::to_eigen(frames.front().pose[0].orientation);
+  const Eigen::Vector3d fwd = q * Eigen::Vector3d(0, 0, -1), left = q * Eigen::Vector3d(-1, 0, 0);
+  const Eigen::Vector3d head = trackers::to_eigen(frames.front().pose[0].position);
+  const Eigen::Quaterniond flat = Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, left)) * q;
+  for (auto& f : frames)
+    for (int c = 0; c < 2; ++c) {
+      Eigen::Vector3d p = head + 0.45 * fwd + (c == 0 ? 0.15 : -0.15) * left;
+      p.y() = 0.76;
+      f.pose[1 + c] = {trackers::to_xr(flat), trackers::to_xr(p)};
+    }
+}
+
+// Each controller's calibrated orientation at a frame against the body's facing frame (rad).
+std::array<double, 2> grip_errors(const features::Calibration& c, const trackers::TrackerFrame& f) {
+  const Eigen::Matrix3d facing = features::Calibration::facing(trackers::to_eigen(f.pose[0].orientation));
+  std::array<double, 2> e{};
+  for (int k = 1; k <= 2; ++k)
+    e[k - 1] = Eigen::Quaterniond((trackers::to_eigen(f.pose[k].orientation) * c.offset[k]).toRotationMatrix().transpose() * facing)
+                   .angularDistance(Eigen::Quaterniond::Identity());
+  return e;
+}
+}  // namespace
+
+TEST_CASE("auto calibration: controllers lying on a table at the stand keep the device model's offset until a stand holds them") {
+  auto table = sparsebody_test::session({{Phase::Stand, 2.0, 1.65}});
+  put_controllers_on_a_table(table);
+  auto rest = sparsebody_test::session({{Phase::Stand, 2.0, 1.65}, {Phase::Walk, 2.0, 1.65}, {Phase::Stand, 2.0, 1.65}});
+  for (auto& f : rest) f.time += 2.0;
+  const auto held = rest.back();
+  SUBCASE("default: the stand sizes the body, the grips are not taken from it") {
+    Feeder f;
+    f.feed(table);
+    REQUIRE(f.r().status == features::CalibrationStatus::Calibrated);
+    CHECK(f.r().eye_height == doctest::Approx(1.65).epsilon(0.002).scale(0));
+    CHECK(f.r().grips_not_held >= 2);
+    CHECK(f.r().grip_default[0]);
+    CHECK(f.r().grip_default[1]);
+    for (int k = 1; k <= 2; ++k)
+      CHECK(f.cal.calibration().offset[k].angularDistance(features::DeviceModel::default_orientation_offset()) < 1e-12);
+    CHECK(std::string(f.r().message).find("both grips not seen held: device model's") != std::string::npos);
+    // picked up: the next stand at the same height is averaged in and gives the held grips
+    f.feed(rest);
+    CHECK(f.r().windows == 2);
+    CHECK_FALSE(f.r().grip_default[0]);
+    CHECK_FALSE(f.r().grip_default[1]);
+    for (double e : grip_errors(f.cal.calibration(), held)) CHECK(e < 1e-3);
+    CHECK(std::string(f.r().message).find("grip") == std::string::npos);
+    // a later table stand does not undo them
+    auto again = sparsebody_test::session({{Phase::Walk, 1.0, 1.65}, {Phase::Stand, 2.0, 1.65}});
+    for (auto& fr : again) fr.time += 8.0;
+    put_controllers_on_a_table(again);
+    f.feed(again);
+    CHECK(f.r().windows == 3);
+    for (double e : grip_errors(f.cal.calibration(), held)) CHECK(e < 1e-3);
+  }
+  SUBCASE("max_grip_deviation = 0: taken from the table (the behaviour before)") {
+    features::AutoCalibrationConfig cfg;
+    cfg.max_grip_deviation = 0;
+    Feeder f(cfg);
+    f.feed(table);
+    f.feed(rest);
+    CHECK(f.r().grips_not_held == 0);
+    for (double e : grip_errors(f.cal.calibration(), held)) CHECK(e == doctest::Approx(M_PI / 2).epsilon(1e-3));
+  }
+}
+
 TEST_CASE("auto calibration: a 2.5 m giant is refused, the default body stays") {
   Feeder f;
   const double eye = 2.5 * 0.936;

@@ -121,6 +121,8 @@ py::dict report_dict(const features::CalibrationReport& r) {
   d["confidence"] = r.confidence, d["floor_estimated"] = r.floor_estimated, d["provisional"] = r.provisional;
   d["floor_not_at_zero"] = r.floor_not_at_zero;
   d["windows"] = r.windows, d["replaced"] = r.replaced, d["raised"] = r.raised, d["skipped"] = r.skipped, d["refused"] = r.refused;
+  d["grips_not_held"] = r.grips_not_held;
+  d["grip_default"] = py::make_tuple(r.grip_default[0], r.grip_default[1]);
   d["message"] = std::string(r.message);
   return d;
 }

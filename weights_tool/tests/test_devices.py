@@ -106,3 +106,38 @@ def test_offdist_moving_leaves_out_the_held_stand(tmp_path):
     assert m["mpjpe"][0] / m["mpjpe"][1] == pytest.approx(0.05 * 30 / 90, abs=1e-4)
     m0 = offdist.compare_positions(P, src)  # no stand: moving is the MPJPE
     assert m0["moving"] == m0["mpjpe"]
+
+
+def test_offdist_controllers_on_a_table(tmp_path):
+    """table mode's session: the first sample's headset held, the controllers flat on the table (a
+    quarter turn from their first orientation) then picked up to their first sample, the session's
+    own samples after it unchanged and time-shifted."""
+    cols = ["time"] + [f"{n}_{a}" for n in ("head", "left_hand", "right_hand")
+                       for a in ("px", "py", "pz", "qx", "qy", "qz", "qw", "valid")]
+    rows = []
+    for i in range(10):
+        r = [i / 72.0]
+        for p in ((0.1, 1.6, 0.2), (-0.2, 0.9, 0.1), (0.3, 0.9, 0.1)):
+            r += [p[0] + 0.01 * i, p[1], p[2], 0.0, 0.0, 0.0, 1.0, 1]
+        rows.append(r)
+    path = tmp_path / "s.csv"
+    path.write_text("# a comment\n" + ",".join(cols) + "\n" + "\n".join(",".join(str(v) for v in r) for r in rows) + "\n")
+    offdist.controllers_on_a_table(str(path), seconds=1.0, pickup=0.5)
+    lines = path.read_text().splitlines()
+    assert lines[0] == "# a comment" and lines[1] == ",".join(cols)
+    out = np.array([[float(x) for x in l.split(",")] for l in lines[2:]])
+    c = {n: i for i, n in enumerate(cols)}
+    n_pre = 72 + 36
+    assert len(out) == n_pre + 10
+    np.testing.assert_allclose(np.diff(out[:, 0]), 1 / 72.0, atol=1e-6)
+    assert out[0, 0] == 0
+    np.testing.assert_allclose(out[n_pre:, 1:], np.array(rows)[:, 1:], atol=1e-8)  # the session, unchanged
+    for side in ("left_hand", "right_hand"):
+        P = out[:, [c[f"{side}_p{a}"] for a in "xyz"]]
+        Q = out[:, [c[f"{side}_q{a}"] for a in "xyzw"]]
+        np.testing.assert_allclose(P[:72, 1], 0.76, atol=1e-8)                     # on the table
+        assert np.abs(P[:72, 2] - (0.2 - 0.45)).max() < 1e-8                       # 0.45 m ahead (-Z)
+        np.testing.assert_allclose(np.abs(Q[:72, 0]), np.sin(np.pi / 4), atol=1e-8)  # flat: a quarter turn about X
+        np.testing.assert_allclose(P[n_pre - 1], P[n_pre], atol=0.02)             # picked up to the first sample
+        assert np.all(np.abs(np.linalg.norm(Q, axis=1) - 1) < 1e-8)
+    np.testing.assert_allclose(out[:n_pre, c["head_px"]], rows[0][c["head_px"]])  # the headset held

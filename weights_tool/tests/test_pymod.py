@@ -218,6 +218,20 @@ def standing(seconds=3.0, rate=72.0, eye=1.62):
     return t, P, Q, np.ones((len(t), 4), bool)
 
 
+@pytest.mark.parametrize("model", ["lobstr", "n3p"])
+def test_calibration_controllers_on_a_table(sb, model):
+    """Controllers lying flat (a quarter turn about X) while the user stands: the stand sizes the body,
+    the controllers keep the device model's offsets and the report says so."""
+    t, P, Q, V = standing()
+    Q[:, 1:3] = [np.sin(np.pi / 4), 0, 0, np.cos(np.pi / 4)]
+    p = sb.create(model)
+    p.run(t, P, Q, V)
+    rep = p.calibration_report()
+    assert rep["status"] == "calibrated" and rep["eye_height"] == pytest.approx(1.62, abs=0.005)
+    assert rep["grip_default"] == (True, True) and rep["grips_not_held"] >= 2
+    assert "both grips not seen held" in rep["message"]
+
+
 @pytest.mark.parametrize("model", ["lobstr", "n3p", "n3p_physics"])
 def test_calibration_control(sb, model):
     t, P, Q, V = standing()
@@ -229,6 +243,7 @@ def test_calibration_control(sb, model):
     assert rep["status"] == "calibrated" and rep["source"] == "automatic", rep
     assert rep["stature"] == pytest.approx(1.62 / 0.936, abs=0.01) and rep["eye_height"] == pytest.approx(1.62, abs=0.005)
     assert rep["first_time"] < 0.5 and rep["windows"] == 1
+    assert rep["grip_default"] == (False, False) and rep["grips_not_held"] == 0  # held as at a stand
     assert out["calibration"][0] == 0 and out["calibration"][-1] == 1  # per row: default body, then calibrated
     auto_scale = p.user_scale
     assert auto_scale == pytest.approx(1 / rep["scale"])

@@ -40,6 +40,12 @@ struct CalibrationReport {
   int raised = 0;    // estimates raised: the headset stayed above a bent stand's height (AutoCalibration::rise)
   int skipped = 0;   // windows more than 4 cm lower than the estimate (sitting, crouching): not used
   int refused = 0;   // windows whose stature was outside the plausible range: not used
+  // windows whose controller (left or right, each counted) was not held as at a stand (e.g. on a
+  // table: AutoCalibrationConfig::max_grip_deviation): its offset not taken from them
+  int grips_not_held = 0;
+  // Calibrated status: the left / right controller still has the device model's orientation offset
+  // (no window has seen it held yet)
+  bool grip_default[2] = {false, false};
   // The estimate is the first stand's early one (AutoCalibrationConfig::first_window): the window
   // is still open and replaces it when the user stops standing (or after max_window).
   bool provisional = false;
