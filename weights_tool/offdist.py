@@ -25,6 +25,9 @@ against the clip that drove it, the same way for every input path:
   table    devices through the CSV path, the session starting before the user picks the controllers
            up: 3 s standing (the first frame held) with both controllers lying flat on a table 0.45 m
            ahead at 0.76 m, a 0.5 s pick-up, then the devices session (controllers_on_a_table)
+  seated   devices through the CSV path, the session starting seated: 5 s with the headset 0.42 m lower
+           and 0.1 m ahead (4 mm of sway), the belt 0.47 m lower, the controllers on the lap (0.3 m
+           ahead, 0.62 m high), a 1.5 s stand-up, then the devices session (seated_start)
   cmu      the CMU clips of Debian's assimp-testmodels (another performer, another skeleton)
 
 Metrics (12 joints mapped by role: hips, head, hands, thighs, knees, ankles, toes; metres -> cm):
@@ -185,8 +188,9 @@ def run_demo(demo, src, out, model, extra, trackers_out=None):
 
 
 DEVICES = ["--devices", "--devices-stand", "0"]  # a session that starts with the user standing 2.5 s
-CSV_MODES = ("csv", "csvstop", "swapped", "noisy", "table")
+CSV_MODES = ("csv", "csvstop", "swapped", "noisy", "table", "seated")
 TABLE_SECONDS, PICKUP_SECONDS = 3.0, 0.5  # table mode: controllers on the table, then picked up
+SEATED_SECONDS, STANDUP_SECONDS = 5.0, 1.5  # seated mode: seated, then standing up
 NOISE_POSITION = (0.0003, 0.001, 0.001, 0.001)  # m, sigma per axis: headset, left, right, belt
 NOISE_ORIENTATION = np.radians(0.2)              # rad, sigma per axis
 
@@ -270,6 +274,47 @@ def controllers_on_a_table(path, seconds=TABLE_SECONDS, pickup=PICKUP_SECONDS, r
             f.write(",".join(str(int(v)) if i in valid else f"{v:.9g}" for i, v in enumerate(r)) + "\n")
 
 
+def seated_start(path, seconds=SEATED_SECONDS, rise=STANDUP_SECONDS, drop=0.42, rate=72.0):
+    """Prepends to a tracker CSV `seconds` of the user seated, then a smoothstep stand-up of `rise` s to
+    its first sample: the headset `drop` m lower and 0.1 m ahead (4 mm of sideways sway at 0.3 Hz),
+    a belt drop + 0.05 m lower, the controllers on the lap (0.3 m ahead of their first position,
+    0.62 m high, as held); the session's own samples follow, time-shifted."""
+    with open(path) as f:
+        lines = f.readlines()
+    h = next(k for k, l in enumerate(lines) if not l.startswith("#"))
+    cols = lines[h].strip().split(",")
+    rows = np.array([[float(x) for x in l.strip().split(",")] for l in lines[h + 1:] if l.strip()])
+    c = {n: i for i, n in enumerate(cols)}
+    r0 = rows[0]
+    x, y, z, w = r0[[c["head_qx"], c["head_qy"], c["head_qz"], c["head_qw"]]]
+    fwd = -np.array([2 * (x * z + w * y), 0.0, 1 - 2 * (x * x + y * y)])  # the headset's -Z, horizontal
+    fwd /= np.linalg.norm(fwd)
+    n_seat, n_up = int(round(seconds * rate)), int(round(rise * rate))
+    pre = np.repeat(r0[None], n_seat + n_up, axis=0)
+    a = np.clip((np.arange(n_seat + n_up) - n_seat + 1) / (n_up + 1), 0, 1)[:, None]
+    a = a * a * (3 - 2 * a)  # 0 seated, 1 standing
+    sway = 0.004 * np.sin(2 * np.pi * 0.3 * np.arange(n_seat + n_up) / rate)[:, None] * np.array([1.0, 0.0, 0.0])
+    seat = {"head": (0.10 * fwd - np.array([0.0, drop, 0.0])), "pelvis": -np.array([0.0, drop + 0.05, 0.0])}
+    for name in ("head", "pelvis", "left_hand", "right_hand"):
+        if f"{name}_px" not in c:
+            continue
+        P = [c[f"{name}_p{k}"] for k in "xyz"]
+        if name in seat:
+            low = r0[P] + seat[name] + (sway if name == "head" else 0.0)
+        else:
+            low = np.repeat((r0[P] + 0.30 * fwd * np.array([1.0, 0.0, 1.0]))[None], len(pre), axis=0)
+            low[:, 1] = 0.62
+        pre[:, P] = (1 - a) * low + a * r0[P]
+    pre[:, 0] = r0[0] + (np.arange(len(pre)) - len(pre)) / rate
+    rows = np.vstack([pre, rows])
+    rows[:, 0] -= rows[0, 0]
+    valid = [i for i, n in enumerate(cols) if n.endswith("_valid")]
+    with open(path, "w") as f:
+        f.writelines(lines[:h + 1])
+        for r in rows:
+            f.write(",".join(str(int(v)) if i in valid else f"{v:.9g}" for i, v in enumerate(r)) + "\n")
+
+
 def swap_hand_columns(path):
     """Exchanges the left and right controllers of a tracker CSV by renaming its header's columns."""
     with open(path) as f:
@@ -289,7 +334,7 @@ def mode_inputs(mode, val_dir, every, tmp):
         return files, DEVICES, files
     if mode in ("csv", "csvstop"):  # the user walks from the first frame and stands half-way through the clip
         return files, ["--devices"], files
-    if mode in ("swapped", "noisy", "table"):
+    if mode in ("swapped", "noisy", "table", "seated"):
         return files, DEVICES, files
     if mode == "cmu":
         return [f for f in CMU if os.path.exists(f)], [], [f for f in CMU if os.path.exists(f)]
@@ -339,6 +384,8 @@ def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None, sb=No
                 hold = (float(opts_c[opts_c.index("--devices-stand") + 1]), 2.5)
             if mode == "table":  # the table and the pick-up hold the first frame too
                 hold = (0.0, 2.5 + TABLE_SECONDS + PICKUP_SECONDS)
+            if mode == "seated":  # so do the seat and the stand-up (the clip does not sit: not compared)
+                hold = (0.0, 2.5 + SEATED_SECONDS + STANDUP_SECONDS)
         csv = os.path.join(tmp, "session.csv")
         if mode in ("csv", "csvstop"):
             half = double_support_near_half(s) if mode == "csvstop" else 0.5 * Clip(s).frames / 30.0
@@ -355,6 +402,8 @@ def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None, sb=No
                     add_tracking_noise(csv, 1000 + ci)
                 if mode == "table":
                     controllers_on_a_table(csv)
+                if mode == "seated":
+                    seated_start(csv)
                 rc, res = module_run(sb, csv, model, extra)
             else:
                 rc, res = module_run(sb, s, model, opts_c + extra)
@@ -374,6 +423,8 @@ def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None, sb=No
                     add_tracking_noise(csv, 1000 + ci)
                 if mode == "table":
                     controllers_on_a_table(csv)
+                if mode == "seated":
+                    seated_start(csv)
                 rc, log = run_demo(demo, csv, out, model, extra)
             else:
                 rc, log = run_demo(demo, s, out, model, opts_c + extra)

@@ -141,3 +141,33 @@ def test_offdist_controllers_on_a_table(tmp_path):
         np.testing.assert_allclose(P[n_pre - 1], P[n_pre], atol=0.02)             # picked up to the first sample
         assert np.all(np.abs(np.linalg.norm(Q, axis=1) - 1) < 1e-8)
     np.testing.assert_allclose(out[:n_pre, c["head_px"]], rows[0][c["head_px"]])  # the headset held
+
+
+def test_offdist_seated_start(tmp_path):
+    """seated mode's session: the headset 0.42 m lower and 0.1 m ahead, the belt 0.47 m lower, the
+    controllers on the lap at 0.62 m, then a stand-up to the first sample; the session unchanged."""
+    cols = ["time"] + [f"{n}_{a}" for n in ("head", "left_hand", "right_hand", "pelvis")
+                       for a in ("px", "py", "pz", "qx", "qy", "qz", "qw", "valid")]
+    rows = []
+    for i in range(10):
+        r = [i / 72.0]
+        for p in ((0.1, 1.6, 0.2), (-0.2, 0.9, 0.1), (0.3, 0.9, 0.1), (0.1, 0.95, 0.2)):
+            r += [p[0], p[1], p[2] - 0.01 * i, 0.0, 0.0, 0.0, 1.0, 1]
+        rows.append(r)
+    path = tmp_path / "s.csv"
+    path.write_text(",".join(cols) + "\n" + "\n".join(",".join(str(v) for v in r) for r in rows) + "\n")
+    offdist.seated_start(str(path), seconds=1.0, rise=0.5)
+    out = np.array([[float(x) for x in l.split(",")] for l in path.read_text().splitlines()[1:]])
+    c = {n: i for i, n in enumerate(cols)}
+    n_pre = 72 + 36
+    assert len(out) == n_pre + 10 and out[0, 0] == 0
+    np.testing.assert_allclose(np.diff(out[:, 0]), 1 / 72.0, atol=1e-6)
+    np.testing.assert_allclose(out[n_pre:, 1:], np.array(rows)[:, 1:], atol=1e-8)
+    np.testing.assert_allclose(out[:72, c["head_py"]], 1.6 - 0.42, atol=1e-8)
+    assert np.all(np.abs(out[:72, c["head_pz"]] - (0.2 - 0.1)) < 1e-8)       # 0.1 m ahead (-Z)
+    assert np.abs(out[:72, c["head_px"]] - 0.1).max() > 0.001                 # sway
+    np.testing.assert_allclose(out[:72, c["pelvis_py"]], 0.95 - 0.47, atol=1e-8)
+    for side in ("left_hand", "right_hand"):
+        np.testing.assert_allclose(out[:72, c[f"{side}_py"]], 0.62, atol=1e-8)
+        np.testing.assert_allclose(out[:72, c[f"{side}_pz"]], 0.1 - 0.3, atol=1e-8)
+    np.testing.assert_allclose(out[n_pre - 1, 1:], out[n_pre, 1:], atol=0.05)  # stood up to the first sample

@@ -47,6 +47,7 @@
 #include "sparsebody/pose/ik.hpp"
 #include "sparsebody/pose/joint_map.hpp"
 #include "sparsebody/pose/rotation6d.hpp"
+#include "sparsebody/trackers/stand_up.hpp"
 #include "sparsebody/trackers/stillness.hpp"
 #include "sparsebody/predict/lobstr_meta.hpp"
 
@@ -81,6 +82,13 @@ struct LoBSTrConfig {
   // nominal), 4.74 -> 3.21 (csv); without the speed limit 0.20 / 2.82 but +0.12 cm nominal MPJPE.
   double still_rearm_speed = 0.12;
   trackers::StillnessConfig stillness{};
+  // A stand-up (the head back near its standing height after sitting or crouching) restarts the
+  // network and lets go of the foot locks (trackers/stand_up.hpp).
+  trackers::StandUpConfig stand_up{};
+  // ... and for this long after it the feet are not held for standing still: the restarted network's
+  // first stances are no place to hold them (validation sessions that start seated, LoBSTr after
+  // the stand-up: 0 / 0.5 / 1 / 2 s give 5.04 / 5.01 / 4.97 / 5.02 cm; without the seat 4.82).
+  double stand_up_unheld_seconds = 1.0;
   bool upper_body_ik = true;
   trackers::SanitizerConfig sanitizer{};
   features::DeviceModel devices{};                 // device -> joint offsets (DeviceModel::none(): trackers at the joints)
@@ -120,6 +128,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     F_hips_T_ = pose::hips_tracker_frame(s, map_).transpose();
     this->start_front_end(meta_.frame_rate, cfg.sanitizer, s.size());
     still_ = trackers::Stillness(cfg.stillness);
+    stand_up_ = trackers::StandUp(cfg.stand_up);
     for (pose::FootLock& l : lock_) {
       l.set_hold_rearm_step(cfg_.still_rearm_speed / meta_.frame_rate);
       l.set_replant(cfg_.replant_released_feet);
@@ -249,6 +258,11 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     calib_.apply(s.pose, cal_);
     for (int k = 1; k <= 2; ++k) measured_[k - 1] = s.measured[k];
     still_.update(cal_[0].position, cal_[0].orientation, 1.0 / meta_.frame_rate);
+    // A stand-up: the state from seated or crouched input, and the feet held there, are stale.
+    if (stand_up_.update(s.pose[0].position, still_.still(), 1.0 / meta_.frame_rate)) {
+      reset_state();
+      unheld_ = static_cast<int>(std::lround(cfg_.stand_up_unheld_seconds * meta_.frame_rate));
+    }
     feat_.compute(cal_, x_);
     return x_;
   }
@@ -279,6 +293,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     reach_.reset(arm_start());
     fit_body();
     auto_.break_window();
+    stand_up_.reset();
     reset_state();
     this->reset_front_end();
   }
@@ -302,6 +317,8 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   bool contact(int foot) const noexcept { return contact_probability(foot) > cfg_.contact_threshold; }
   bool foot_locked(int foot) const noexcept { return lock_[foot].state() != pose::FootLock::State::Free; }
   bool standing_still() const noexcept { return still_.still(); }
+  // Stand-ups found (trackers/stand_up.hpp): each restarted the network and the foot locks.
+  long long stand_ups() const noexcept { return stand_up_.count(); }
   int window() const noexcept { return window_; }
   RunMode mode() const noexcept { return cfg_.mode; }
 
@@ -378,6 +395,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
 
   // Contacts from the network, foot locks, and leg IK keeping each foot's world orientation.
   void contacts_and_legs() noexcept {
+    if (unheld_ > 0) --unheld_;
     if (!cfg_.contact_ik) return;
     const pose::Skeleton& s = body_;
     bool changed = false;
@@ -388,7 +406,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       const double leg = s.offsets[ll].norm() + s.offsets[ft].norm();  // hip to ankle, straight
       const double reach = 1.02 * leg + s.offsets[toe].norm();
       Eigen::Vector3d target;
-      const bool still = cfg_.hold_feet_when_still && still_.still();
+      const bool still = cfg_.hold_feet_when_still && still_.still() && unheld_ == 0;
       lock_[foot].hold(still);
       // The user just stopped: the foot stays as shown last frame (the network walks on for a step).
       if (still && still_.stopped_now()) lock_[foot].stop(&meta_.toe_height);
@@ -437,6 +455,8 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   T y_[Net::out_size] = {};
   pose::FootLock lock_[2];  // the toes' locks (10-frame blends), with the held feet's orientation
   trackers::Stillness still_;
+  trackers::StandUp stand_up_;
+  int unheld_ = 0;  // frames left in which a stand-up's restart holds no feet (stand_up_unheld_seconds)
   std::vector<T> ring_;
   int window_ = 30, filled_ = 0, head_ = 0;
   LoBSTrUpperBody upper_;

@@ -61,6 +61,7 @@
 #include "sparsebody/pose/ik.hpp"
 #include "sparsebody/pose/joint_map.hpp"
 #include "sparsebody/predict/n3p_predictor.hpp"
+#include "sparsebody/trackers/stand_up.hpp"
 #include "sparsebody/trackers/stillness.hpp"
 
 namespace sparsebody::avatar {
@@ -111,6 +112,13 @@ struct N3PConfig {
   // nominal), 4.74 -> 3.21 (csv); without the speed limit 0.20 / 2.82 but +0.12 cm nominal MPJPE.
   double still_rearm_speed = 0.12;
   trackers::StillnessConfig stillness{};
+  // A stand-up (the head back near its standing height after sitting or crouching) restarts the
+  // predictor and lets go of the foot pins (trackers/stand_up.hpp).
+  trackers::StandUpConfig stand_up{};
+  // ... and for this long after it the feet are not held for standing still: the restarted network's
+  // first stances are no place to hold them (validation sessions that start seated, LoBSTr after
+  // the stand-up: 0 / 0.5 / 1 / 2 s give 5.04 / 5.01 / 4.97 / 5.02 cm; without the seat 4.82).
+  double stand_up_unheld_seconds = 1.0;
   // Head anchor: after every step the predicted body (its heading frame h) moves horizontally so
   // that its head joint is where the calibrated headset puts it. The predictor only integrates its
   // own dh, so without this the avatar drifts from the user (tens of cm in turns, metres over a
@@ -182,6 +190,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     map_ = pose::JointMap::from_names(s, w.lo->info().source);
     this->start_front_end(pred_.meta().frame_rate, cfg.sanitizer, s.size());
     still_ = trackers::Stillness(cfg.stillness);
+    stand_up_ = trackers::StandUp(cfg.stand_up);
     for (pose::FootLock& l : lock_) l.set_hold_rearm_step(cfg_.still_rearm_speed / pred_.meta().frame_rate);
     auto f = [&](const char* n) { return s.find(n); };
     const char* arm[2][3] = {{"UpperArm_L", "LowerArm_L", "Hand_L"}, {"UpperArm_R", "LowerArm_R", "Hand_R"}};
@@ -339,6 +348,12 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     std::array<bool, 3> present{true, false, false};  // the headset: measured or held
     o[0] = calib_.apply(0, s.pose[0]);
     still_.update(s.pose[0].position, s.pose[0].orientation, 1.0 / pred_.meta().frame_rate);
+    // A stand-up: the predictor's state from seated or crouched input, and the feet pinned there,
+    // are stale.
+    if (stand_up_.update(s.pose[0].position, still_.still(), 1.0 / pred_.meta().frame_rate)) {
+      reset_state();
+      unheld_ = static_cast<int>(std::lround(cfg_.stand_up_unheld_seconds * pred_.meta().frame_rate));
+    }
     for (int k = 1; k < 3; ++k) {
       present[k] = cfg_.use_controllers && measured[k];
       if (present[k]) o[k] = calib_.apply(k, dev[k]);
@@ -388,6 +403,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     }
     fit_arms_reset();
     auto_.break_window();
+    stand_up_.reset();
     reset_state();
     this->reset_front_end();
   }
@@ -410,6 +426,8 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   bool contact(int foot) const noexcept { return contact_probability(foot) > cfg_.contact_threshold; }
   bool foot_locked(int foot) const noexcept { return lock_[foot].state() != pose::FootLock::State::Free; }
   bool standing_still() const noexcept { return still_.still(); }
+  // Stand-ups found (trackers/stand_up.hpp): each restarted the predictor and the foot pins.
+  long long stand_ups() const noexcept { return stand_up_.count(); }
   // Controllers replaced by o* in the last frame (0: 3-point, 1: one controller, 2: HMD only).
   int predicted_controllers() const noexcept { return pred_.substituted(1) + pred_.substituted(2); }
   // The calibrated trackers of the last usable frame (joint poses, standard-skeleton scale) and which
@@ -523,6 +541,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   // ankle, so a foot turning about it moves the toes: 1.2 cm/s of creep), eased in and out over
   // 8 frames.
   void pin_feet() noexcept {
+    if (unheld_ > 0) --unheld_;
     const bool toe_pin = cfg_.pin == N3PConfig::Pin::Toe;
     // Toe pins: the headset moving up or down fast (a jump, a drop) holds nothing for a while. The
     // stillness detector watches horizontal motion only, so a jump from a stand is "still", and a
@@ -533,7 +552,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     for (int side = 0; side < 2; ++side) {
       const int* l = leg_[side];
       Eigen::Vector3d target;
-      const bool still = cfg_.hold_feet_when_still && still_.still() && !(toe_pin && airborne_ > 0);
+      const bool still = cfg_.hold_feet_when_still && still_.still() && !(toe_pin && airborne_ > 0) && unheld_ == 0;
       lock_[side].hold(still);
       const bool c = contact(side) || (still && contact_probability(side) > cfg_.still_contact_threshold);
       // The user just stopped: the foot stays as shown last frame (the network walks on for a step).
@@ -658,6 +677,8 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   pose::FootLock lock_[2] = {pose::FootLock(8, pose::FootLock::Rearm::NextFrame),
                              pose::FootLock(8, pose::FootLock::Rearm::NextFrame)};
   trackers::Stillness still_;
+  trackers::StandUp stand_up_;
+  int unheld_ = 0;  // frames left in which a stand-up's restart holds no feet (stand_up_unheld_seconds)
   features::n3p::TrackerSet trackers_{};
   std::array<bool, 3> present_{};
   int arm_[2][3] = {}, leg_[2][3] = {};

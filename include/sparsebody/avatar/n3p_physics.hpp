@@ -146,8 +146,9 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
     direct_.step(f, gap);
     ++this->frames_;
     if (gap) restart_ = true;
-    if (direct_.calibration_changes() != calibration_seen_) {
-      calibration_seen_ = direct_.calibration_changes();
+    if (direct_.calibration_changes() != calibration_seen_ || direct_.stand_ups() != stand_ups_seen_) {
+      calibration_seen_ = direct_.calibration_changes();  // a new body, or direct mode restarted at a stand-up
+      stand_ups_seen_ = direct_.stand_ups();
       restart_ = true;
     }
     if (!direct_.has_output()) return;
@@ -173,6 +174,7 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
     if (control_) control_->reset();
     started_ = restart_ = false;
     calibration_seen_ = direct_.calibration_changes();
+    stand_ups_seen_ = direct_.stand_ups();
     recentres_seen_ = this->recentres();
     residual_ = {};
     stats_ = {};
@@ -330,6 +332,7 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
   double out_time_ = 0;
   bool started_ = false, restart_ = false;
   long long calibration_seen_ = 0;  // direct_.calibration_changes() already restarted for
+  long long stand_ups_seen_ = 0;    // direct_.stand_ups() already restarted for
   int recentres_seen_ = 0;          // this->recentres() already passed on to direct mode
   control::ResidualWrench residual_;
   control::ResidualStats stats_;
