@@ -195,35 +195,6 @@ NOISE_POSITION = (0.0003, 0.001, 0.001, 0.001)  # m, sigma per axis: headset, le
 NOISE_ORIENTATION = np.radians(0.2)              # rad, sigma per axis
 
 
-def add_tracking_noise(path, seed):
-    """Adds white tracking noise (NOISE_POSITION, NOISE_ORIENTATION) to every sample of a tracker CSV:
-    each position moved by a Gaussian offset, each orientation turned by a small Gaussian rotation."""
-    with open(path) as f:
-        lines = f.readlines()
-    h = next(k for k, l in enumerate(lines) if not l.startswith("#"))
-    cols = lines[h].strip().split(",")
-    rows = np.array([[float(x) for x in l.strip().split(",")] for l in lines[h + 1:] if l.strip()])
-    rng = np.random.default_rng(seed)
-    for k, name in enumerate(("head", "left_hand", "right_hand", "pelvis")):
-        if name + "_px" not in cols:
-            continue
-        p = [cols.index(f"{name}_p{a}") for a in "xyz"]
-        q = [cols.index(f"{name}_q{a}") for a in "xyzw"]
-        rows[:, p] += rng.normal(0.0, NOISE_POSITION[k], (len(rows), 3))
-        w = rng.normal(0.0, NOISE_ORIENTATION, (len(rows), 3))  # small rotation vectors, world frame
-        a = np.linalg.norm(w, axis=1, keepdims=True)
-        d = np.concatenate([np.where(a > 0, w / np.maximum(a, 1e-12), 0) * np.sin(a / 2), np.cos(a / 2)], axis=1)
-        x1, y1, z1, w1 = d.T
-        x2, y2, z2, w2 = rows[:, q].T
-        rows[:, q] = np.stack([w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2, w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-                               w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2, w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2], axis=1)
-    valid = [i for i, c in enumerate(cols) if c.endswith("_valid")]
-    with open(path, "w") as f:
-        f.writelines(lines[:h + 1])
-        for r in rows:
-            f.write(",".join(str(int(v)) if i in valid else f"{v:.9g}" for i, v in enumerate(r)) + "\n")
-
-
 def _qmul(a, b):
     """Quaternion products a b of [..., 4] arrays, x y z w."""
     x1, y1, z1, w1 = np.moveaxis(a, -1, 0)
@@ -232,22 +203,68 @@ def _qmul(a, b):
                      w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2, w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2], axis=-1)
 
 
+class _TrackerCsv:
+    """A tracker CSV as read back: its comment and header lines, column names, rows [n, columns]."""
+
+    def __init__(self, path):
+        with open(path) as f:
+            lines = f.readlines()
+        h = next(k for k, l in enumerate(lines) if not l.startswith("#"))
+        self.head, self.cols = lines[:h + 1], lines[h].strip().split(",")
+        self.rows = np.array([[float(x) for x in l.strip().split(",")] for l in lines[h + 1:] if l.strip()])
+        self.c = {n: i for i, n in enumerate(self.cols)}
+
+    def index(self, name, what):
+        """Column indices of a tracker's position ("p": x y z) or orientation ("q": x y z w)."""
+        return [self.c[f"{name}_{what}{a}"] for a in ("xyz" if what == "p" else "xyzw")]
+
+    def forward(self, row):
+        """The headset's -Z in a row, horizontal, unit length (where the user looks)."""
+        x, y, z, w = row[self.index("head", "q")]
+        f = -np.array([2 * (x * z + w * y), 0.0, 1 - 2 * (x * x + y * y)])
+        return f / np.linalg.norm(f)
+
+    def prepend(self, pre, rate):
+        """Rows `pre` put before the session at `rate` Hz, the session's own time-shifted, time 0 first."""
+        pre[:, 0] = self.rows[0, 0] + (np.arange(len(pre)) - len(pre)) / rate
+        self.rows = np.vstack([pre, self.rows])
+        self.rows[:, 0] -= self.rows[0, 0]
+
+    def write(self, path):
+        valid = [i for i, n in enumerate(self.cols) if n.endswith("_valid")]
+        with open(path, "w") as f:
+            f.writelines(self.head)
+            for r in self.rows:
+                f.write(",".join(str(int(v)) if i in valid else f"{v:.9g}" for i, v in enumerate(r)) + "\n")
+
+
+def add_tracking_noise(path, seed):
+    """Adds white tracking noise (NOISE_POSITION, NOISE_ORIENTATION) to every sample of a tracker CSV:
+    each position moved by a Gaussian offset, each orientation turned by a small Gaussian rotation."""
+    csv = _TrackerCsv(path)
+    rows = csv.rows
+    rng = np.random.default_rng(seed)
+    for k, name in enumerate(("head", "left_hand", "right_hand", "pelvis")):
+        if name + "_px" not in csv.c:
+            continue
+        p, q = csv.index(name, "p"), csv.index(name, "q")
+        rows[:, p] += rng.normal(0.0, NOISE_POSITION[k], (len(rows), 3))
+        w = rng.normal(0.0, NOISE_ORIENTATION, (len(rows), 3))  # small rotation vectors, world frame
+        a = np.linalg.norm(w, axis=1, keepdims=True)
+        d = np.concatenate([np.where(a > 0, w / np.maximum(a, 1e-12), 0) * np.sin(a / 2), np.cos(a / 2)], axis=1)
+        rows[:, q] = _qmul(d, rows[:, q])
+    csv.write(path)
+
+
 def controllers_on_a_table(path, seconds=TABLE_SECONDS, pickup=PICKUP_SECONDS, rate=72.0):
     """Prepends to a tracker CSV `seconds` of its first sample's headset (and belt) held, with both
     controllers lying flat on a table (a quarter turn about the world X axis from their first
     orientation) 0.45 m ahead of the headset and 0.15 m to each side at 0.76 m, then a smoothstep
     pick-up of `pickup` s to their first sample; the session's own samples follow, time-shifted."""
-    with open(path) as f:
-        lines = f.readlines()
-    h = next(k for k, l in enumerate(lines) if not l.startswith("#"))
-    cols = lines[h].strip().split(",")
-    rows = np.array([[float(x) for x in l.strip().split(",")] for l in lines[h + 1:] if l.strip()])
-    c = {n: i for i, n in enumerate(cols)}
-    r0 = rows[0]
-    head = r0[[c["head_px"], c["head_py"], c["head_pz"]]]
-    x, y, z, w = r0[[c["head_qx"], c["head_qy"], c["head_qz"], c["head_qw"]]]
-    fwd = -np.array([2 * (x * z + w * y), 0.0, 1 - 2 * (x * x + y * y)])  # the headset's -Z, horizontal
-    fwd /= np.linalg.norm(fwd)
+    csv = _TrackerCsv(path)
+    r0 = csv.rows[0]
+    head = r0[csv.index("head", "p")]
+    fwd = csv.forward(r0)
     right = np.array([-fwd[2], 0.0, fwd[0]])
     flat = np.array([np.sin(np.pi / 4), 0.0, 0.0, np.cos(np.pi / 4)])
     n_table, n_pick = int(round(seconds * rate)), int(round(pickup * rate))
@@ -255,8 +272,7 @@ def controllers_on_a_table(path, seconds=TABLE_SECONDS, pickup=PICKUP_SECONDS, r
     a = np.clip((np.arange(n_table + n_pick) - n_table + 1) / (n_pick + 1), 0, 1)[:, None]
     a = a * a * (3 - 2 * a)
     for side, sign in (("left_hand", -1), ("right_hand", 1)):
-        P = [c[f"{side}_p{k}"] for k in "xyz"]
-        Q = [c[f"{side}_q{k}"] for k in "xyzw"]
+        P, Q = csv.index(side, "p"), csv.index(side, "q")
         tp = head + 0.45 * fwd + sign * 0.15 * right
         tp[1] = 0.76
         tq = _qmul(flat, r0[Q])
@@ -264,14 +280,8 @@ def controllers_on_a_table(path, seconds=TABLE_SECONDS, pickup=PICKUP_SECONDS, r
         pre[:, P] = (1 - a) * tp + a * r0[P]
         q = (1 - a) * tq + a * q0
         pre[:, Q] = q / np.linalg.norm(q, axis=1, keepdims=True)
-    pre[:, 0] = r0[0] + (np.arange(len(pre)) - len(pre)) / rate
-    rows = np.vstack([pre, rows])
-    rows[:, 0] -= rows[0, 0]
-    valid = [i for i, n in enumerate(cols) if n.endswith("_valid")]
-    with open(path, "w") as f:
-        f.writelines(lines[:h + 1])
-        for r in rows:
-            f.write(",".join(str(int(v)) if i in valid else f"{v:.9g}" for i, v in enumerate(r)) + "\n")
+    csv.prepend(pre, rate)
+    csv.write(path)
 
 
 def seated_start(path, seconds=SEATED_SECONDS, rise=STANDUP_SECONDS, drop=0.42, rate=72.0):
@@ -279,16 +289,9 @@ def seated_start(path, seconds=SEATED_SECONDS, rise=STANDUP_SECONDS, drop=0.42, 
     its first sample: the headset `drop` m lower and 0.1 m ahead (4 mm of sideways sway at 0.3 Hz),
     a belt drop + 0.05 m lower, the controllers on the lap (0.3 m ahead of their first position,
     0.62 m high, as held); the session's own samples follow, time-shifted."""
-    with open(path) as f:
-        lines = f.readlines()
-    h = next(k for k, l in enumerate(lines) if not l.startswith("#"))
-    cols = lines[h].strip().split(",")
-    rows = np.array([[float(x) for x in l.strip().split(",")] for l in lines[h + 1:] if l.strip()])
-    c = {n: i for i, n in enumerate(cols)}
-    r0 = rows[0]
-    x, y, z, w = r0[[c["head_qx"], c["head_qy"], c["head_qz"], c["head_qw"]]]
-    fwd = -np.array([2 * (x * z + w * y), 0.0, 1 - 2 * (x * x + y * y)])  # the headset's -Z, horizontal
-    fwd /= np.linalg.norm(fwd)
+    csv = _TrackerCsv(path)
+    r0 = csv.rows[0]
+    fwd = csv.forward(r0)
     n_seat, n_up = int(round(seconds * rate)), int(round(rise * rate))
     pre = np.repeat(r0[None], n_seat + n_up, axis=0)
     a = np.clip((np.arange(n_seat + n_up) - n_seat + 1) / (n_up + 1), 0, 1)[:, None]
@@ -296,23 +299,17 @@ def seated_start(path, seconds=SEATED_SECONDS, rise=STANDUP_SECONDS, drop=0.42, 
     sway = 0.004 * np.sin(2 * np.pi * 0.3 * np.arange(n_seat + n_up) / rate)[:, None] * np.array([1.0, 0.0, 0.0])
     seat = {"head": (0.10 * fwd - np.array([0.0, drop, 0.0])), "pelvis": -np.array([0.0, drop + 0.05, 0.0])}
     for name in ("head", "pelvis", "left_hand", "right_hand"):
-        if f"{name}_px" not in c:
+        if f"{name}_px" not in csv.c:
             continue
-        P = [c[f"{name}_p{k}"] for k in "xyz"]
+        P = csv.index(name, "p")
         if name in seat:
             low = r0[P] + seat[name] + (sway if name == "head" else 0.0)
         else:
-            low = np.repeat((r0[P] + 0.30 * fwd * np.array([1.0, 0.0, 1.0]))[None], len(pre), axis=0)
+            low = np.repeat((r0[P] + 0.30 * fwd)[None], len(pre), axis=0)
             low[:, 1] = 0.62
         pre[:, P] = (1 - a) * low + a * r0[P]
-    pre[:, 0] = r0[0] + (np.arange(len(pre)) - len(pre)) / rate
-    rows = np.vstack([pre, rows])
-    rows[:, 0] -= rows[0, 0]
-    valid = [i for i, n in enumerate(cols) if n.endswith("_valid")]
-    with open(path, "w") as f:
-        f.writelines(lines[:h + 1])
-        for r in rows:
-            f.write(",".join(str(int(v)) if i in valid else f"{v:.9g}" for i, v in enumerate(r)) + "\n")
+    csv.prepend(pre, rate)
+    csv.write(path)
 
 
 def swap_hand_columns(path):
