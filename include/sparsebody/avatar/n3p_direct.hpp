@@ -115,9 +115,9 @@ struct N3PConfig {
   // A stand-up (the head back near its standing height after sitting or crouching) restarts the
   // predictor and lets go of the foot pins (trackers/stand_up.hpp).
   trackers::StandUpConfig stand_up{};
-  // ... and for this long after it the feet are not held for standing still: the restarted network's
-  // first stances are no place to hold them (validation sessions that start seated, LoBSTr after
-  // the stand-up: 0 / 0.5 / 1 / 2 s give 5.04 / 5.01 / 4.97 / 5.02 cm; without the seat 4.82).
+  // ... and for this long after it the feet are not held for standing still, as in LoBSTr
+  // (LoBSTrConfig::stand_up_unheld_seconds; here 0-2 s all give 5.50 cm after the stand-up on
+  // validation sessions that start seated, 5.57 without the seat).
   double stand_up_unheld_seconds = 1.0;
   // Head anchor: after every step the predicted body (its heading frame h) moves horizontally so
   // that its head joint is where the calibrated headset puts it. The predictor only integrates its
