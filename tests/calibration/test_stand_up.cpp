@@ -149,7 +149,9 @@ TEST_CASE("stand-up detector: 2 s resting low then 0.4 s up is one stand-up; a b
   CHECK(hold(s, seat, true, 1.0) == 0);
   CHECK(s.armed());
   CHECK(move(s, seat, stand, false, 1.2) + hold(s, stand, true, 0.2) == 1);  // getting up (not "still")
+  CHECK_FALSE(s.holding());                      // feet not held for 1 s after it
   CHECK(hold(s, stand, true, 3.0) == 0);         // once
+  CHECK(s.holding());
   CHECK(s.count() == 1);
   // a bow: low for 1.5 s, too short a rest
   CHECK(move(s, stand, V(0.3, 1.20, -0.1), true, 0.5) == 0);
@@ -169,6 +171,10 @@ TEST_CASE("stand-up detector: 2 s resting low then 0.4 s up is one stand-up; a b
   CHECK(s.armed());
   CHECK(hold(s, stand, true, 0.5) == 1);
   CHECK(s.count() == 2);
+  CHECK_FALSE(s.holding());
+  s.reset();  // a pipeline's reset(): like a new detector (the count kept)
+  CHECK(s.holding());
+  CHECK_FALSE(s.armed());
   trackers::StandUpConfig off;
   off.enabled = false;
   trackers::StandUp never(off);

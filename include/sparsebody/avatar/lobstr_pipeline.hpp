@@ -85,10 +85,6 @@ struct LoBSTrConfig {
   // A stand-up (the head back near its standing height after sitting or crouching) restarts the
   // network and lets go of the foot locks (trackers/stand_up.hpp).
   trackers::StandUpConfig stand_up{};
-  // ... and for this long after it the feet are not held for standing still: the restarted network's
-  // first stances are no place to hold them (validation sessions that start seated, LoBSTr after
-  // the stand-up: 0 / 0.5 / 1 / 2 s give 5.04 / 5.01 / 4.97 / 5.02 cm; without the seat 4.82).
-  double stand_up_unheld_seconds = 1.0;
   bool upper_body_ik = true;
   trackers::SanitizerConfig sanitizer{};
   features::DeviceModel devices{};                 // device -> joint offsets (DeviceModel::none(): trackers at the joints)
@@ -259,10 +255,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
     for (int k = 1; k <= 2; ++k) measured_[k - 1] = s.measured[k];
     still_.update(cal_[0].position, cal_[0].orientation, 1.0 / meta_.frame_rate);
     // A stand-up: the state from seated or crouched input, and the feet held there, are stale.
-    if (stand_up_.update(s.pose[0].position, still_.still(), 1.0 / meta_.frame_rate)) {
-      reset_state();
-      unheld_ = static_cast<int>(std::lround(cfg_.stand_up_unheld_seconds * meta_.frame_rate));
-    }
+    if (stand_up_.update(s.pose[0].position, still_.still(), 1.0 / meta_.frame_rate)) reset_state();
     feat_.compute(cal_, x_);
     return x_;
   }
@@ -395,7 +388,6 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
 
   // Contacts from the network, foot locks, and leg IK keeping each foot's world orientation.
   void contacts_and_legs() noexcept {
-    if (unheld_ > 0) --unheld_;
     if (!cfg_.contact_ik) return;
     const pose::Skeleton& s = body_;
     bool changed = false;
@@ -406,7 +398,7 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
       const double leg = s.offsets[ll].norm() + s.offsets[ft].norm();  // hip to ankle, straight
       const double reach = 1.02 * leg + s.offsets[toe].norm();
       Eigen::Vector3d target;
-      const bool still = cfg_.hold_feet_when_still && still_.still() && unheld_ == 0;
+      const bool still = cfg_.hold_feet_when_still && still_.still() && stand_up_.holding();
       lock_[foot].hold(still);
       // The user just stopped: the foot stays as shown last frame (the network walks on for a step).
       if (still && still_.stopped_now()) lock_[foot].stop(&meta_.toe_height);
@@ -456,7 +448,6 @@ class LoBSTrPipeline : public PipelineFrontEnd<LoBSTrPipeline<T, Hidden, Latent,
   pose::FootLock lock_[2];  // the toes' locks (10-frame blends), with the held feet's orientation
   trackers::Stillness still_;
   trackers::StandUp stand_up_;
-  int unheld_ = 0;  // frames left in which a stand-up's restart holds no feet (stand_up_unheld_seconds)
   std::vector<T> ring_;
   int window_ = 30, filled_ = 0, head_ = 0;
   LoBSTrUpperBody upper_;

@@ -115,10 +115,6 @@ struct N3PConfig {
   // A stand-up (the head back near its standing height after sitting or crouching) restarts the
   // predictor and lets go of the foot pins (trackers/stand_up.hpp).
   trackers::StandUpConfig stand_up{};
-  // ... and for this long after it the feet are not held for standing still, as in LoBSTr
-  // (LoBSTrConfig::stand_up_unheld_seconds; here 0-2 s all give 5.50 cm after the stand-up on
-  // validation sessions that start seated, 5.57 without the seat).
-  double stand_up_unheld_seconds = 1.0;
   // Head anchor: after every step the predicted body (its heading frame h) moves horizontally so
   // that its head joint is where the calibrated headset puts it. The predictor only integrates its
   // own dh, so without this the avatar drifts from the user (tens of cm in turns, metres over a
@@ -350,10 +346,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     still_.update(s.pose[0].position, s.pose[0].orientation, 1.0 / pred_.meta().frame_rate);
     // A stand-up: the predictor's state from seated or crouched input, and the feet pinned there,
     // are stale.
-    if (stand_up_.update(s.pose[0].position, still_.still(), 1.0 / pred_.meta().frame_rate)) {
-      reset_state();
-      unheld_ = static_cast<int>(std::lround(cfg_.stand_up_unheld_seconds * pred_.meta().frame_rate));
-    }
+    if (stand_up_.update(s.pose[0].position, still_.still(), 1.0 / pred_.meta().frame_rate)) reset_state();
     for (int k = 1; k < 3; ++k) {
       present[k] = cfg_.use_controllers && measured[k];
       if (present[k]) o[k] = calib_.apply(k, dev[k]);
@@ -541,7 +534,6 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
   // ankle, so a foot turning about it moves the toes: 1.2 cm/s of creep), eased in and out over
   // 8 frames.
   void pin_feet() noexcept {
-    if (unheld_ > 0) --unheld_;
     const bool toe_pin = cfg_.pin == N3PConfig::Pin::Toe;
     // Toe pins: the headset moving up or down fast (a jump, a drop) holds nothing for a while. The
     // stillness detector watches horizontal motion only, so a jump from a stand is "still", and a
@@ -552,7 +544,7 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
     for (int side = 0; side < 2; ++side) {
       const int* l = leg_[side];
       Eigen::Vector3d target;
-      const bool still = cfg_.hold_feet_when_still && still_.still() && !(toe_pin && airborne_ > 0) && unheld_ == 0;
+      const bool still = cfg_.hold_feet_when_still && still_.still() && !(toe_pin && airborne_ > 0) && stand_up_.holding();
       lock_[side].hold(still);
       const bool c = contact(side) || (still && contact_probability(side) > cfg_.still_contact_threshold);
       // The user just stopped: the foot stays as shown last frame (the network walks on for a step).
@@ -678,7 +670,6 @@ class N3PPipeline : public PipelineFrontEnd<N3PPipeline<T, HSig, HLo, HUp, W>> {
                              pose::FootLock(8, pose::FootLock::Rearm::NextFrame)};
   trackers::Stillness still_;
   trackers::StandUp stand_up_;
-  int unheld_ = 0;  // frames left in which a stand-up's restart holds no feet (stand_up_unheld_seconds)
   features::n3p::TrackerSet trackers_{};
   std::array<bool, 3> present_{};
   int arm_[2][3] = {}, leg_[2][3] = {};

@@ -571,13 +571,13 @@ class AutoCalibration {
             if (grip) c.offset[k] = calib_.offset[k];
             continue;
           }
-          const Eigen::Quaterniond o = window_offset(at(best[k]), k);
-          if (grip) {
-            if (!grip_held(o)) {  // keeps the one it has (the device model's, or an earlier window's)
-              c.offset[k] = calib_.offset[k];
-              ++report_.grips_not_held;
-              continue;
-            }
+          Eigen::Quaterniond o;
+          if (!grip) {
+            o = window_offset(at(best[k]), k);
+          } else if (!held_grip(at(best[k]), k, o)) {  // keeps the one it has (the device model's, or an earlier window's)
+            c.offset[k] = calib_.offset[k];
+            continue;
+          } else {
             grip_set_[k - 1] = true;
           }
           c.offset[k] = o;
@@ -588,10 +588,9 @@ class AutoCalibration {
       // (the orientation offsets of the estimate are kept, except a controller's that no window
       // gave yet: this one's, if it is held)
       for (int k = 1; k <= 2; ++k) {
+        Eigen::Quaterniond o;
         if (grip_set_[k - 1] || !std::isfinite(best_score[k])) continue;
-        const Eigen::Quaterniond o = window_offset(at(best[k]), k);
-        if (grip_held(o)) calib_.offset[k] = o, grip_set_[k - 1] = true;
-        else ++report_.grips_not_held;
+        if (held_grip(at(best[k]), k, o)) calib_.offset[k] = o, grip_set_[k - 1] = true;
       }
       est_eye_ = (est_eye_ * est_n_ + eye_raw) / (est_n_ + 1);
       est_quality_ = (est_quality_ * est_n_ + quality) / (est_n_ + 1);
@@ -631,11 +630,15 @@ class AutoCalibration {
     if (k == 3) target = target * devices_.pelvis_standing.toRotationMatrix();
     return Eigen::Quaterniond(s.q[k].normalized().toRotationMatrix().transpose() * target);
   }
-  // A controller's offset as a hand at a stand gives it (max_grip_deviation).
-  bool grip_held(const Eigen::Quaterniond& o) const noexcept {
+  // Controller k's offset o at a window's sample; true when it is held as a hand at a stand holds
+  // it (max_grip_deviation), else the window is counted in report_.grips_not_held.
+  bool held_grip(const Sample& s, int k, Eigen::Quaterniond& o) noexcept {
+    o = window_offset(s, k);
     if (!(cfg_.max_grip_deviation > 0)) return true;
     const double a = o.angularDistance(DeviceModel::default_orientation_offset());
-    return std::isfinite(a) && a <= cfg_.max_grip_deviation * M_PI / 180.0;
+    if (std::isfinite(a) && a <= cfg_.max_grip_deviation * M_PI / 180.0) return true;
+    ++report_.grips_not_held;
+    return false;
   }
 
   // The one-line message of a calibrated report (with the windows not used, if any).
