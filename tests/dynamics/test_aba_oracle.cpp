@@ -3,7 +3,11 @@
 #include <doctest/doctest.h>
 
 #include <Eigen/Cholesky>
+#include <algorithm>
+#include <array>
 #include <cstdio>
+#include <string>
+#include <vector>
 
 #include "sparsebody/character/avatar.hpp"
 #include "sparsebody/character/humanoid3d.hpp"
@@ -111,4 +115,152 @@ TEST_CASE("ABA == (M + diag(armature) + h Kd)^-1 (tau - C) on the default avatar
   CHECK(e0 <= 1e-10);
   CHECK(e1 <= 1e-10);
   CHECK((a - b).norm() > 0.05 * b.norm());
+}
+
+// ---- pass 2 in pairs (Model::backward_steps) ------------------------------------------------------
+
+// Every body stepped once, each after all its children, and a pair's two bodies with the same
+// spherical or revolute joint, both with parents.
+template <class Model>
+static int check_backward_plan(const Model& m) {
+  REQUIRE(m.backward_steps_nb == m.nb);
+  std::vector<int> step_of(m.nb, -1);
+  int pairs = 0;
+  for (int s = 0; s < m.num_backward_steps; ++s) {
+    const auto& st = m.backward_steps[s];
+    for (const int k : st) {
+      if (k < 0) continue;
+      REQUIRE(k < m.nb);
+      CHECK(step_of[k] == -1);
+      step_of[k] = s;
+    }
+    if (st[1] >= 0) {
+      ++pairs;
+      const auto &a = m.bodies[st[0]], &b = m.bodies[st[1]];
+      CHECK(a.joint == b.joint);
+      CHECK((a.joint == JointType::Spherical || a.joint == JointType::Revolute));
+      CHECK(a.parent >= 0);
+      CHECK(b.parent >= 0);
+    }
+  }
+  for (int i = 0; i < m.nb; ++i) {
+    REQUIRE(step_of[i] >= 0);
+    if (m.bodies[i].parent >= 0) CHECK(step_of[i] < step_of[m.bodies[i].parent]);  // children first
+  }
+  return pairs;
+}
+
+// qdd from the paired plan against the plain reverse order (and the unplanned fallback), with
+// implicit damping, armature and external loads f_ext, K_ext (a contact solve's): equal to rounding.
+template <class S, class Model>
+static double paired_vs_plain(const Model& model, int trials, unsigned seed) {
+  const auto m = model.template cast<S>();
+  auto plain = m, unplanned = m;
+  plain.plan_backward_steps(false);
+  unplanned.backward_steps_nb = -1;
+  CHECK(check_backward_plan(plain) == 0);
+  constexpr int MB = Model::kMaxBodies, MD = Model::kMaxDofs;
+  Data<S, MB, MD> d(m), dp(plain), du(unplanned);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  typename Model::VecQ q;
+  typename Model::VecV qd;
+  double worst = 0;
+  for (int t = 0; t < trials; ++t) {
+    dyn_test::random_state(model, rng, q, qd);
+    const auto qs = q.template cast<S>().eval();
+    const auto qds = qd.template cast<S>().eval();
+    typename dynamics::Model<S, MB, MD>::VecV tau(m.nv), a, b, c;
+    for (int k = 0; k < m.nv; ++k) tau(k) = S(20 * n(rng));
+    for (auto* x : {&d, &dp, &du}) {
+      implicit_damping_diagonal(m, S(1.0 / 120), true, x->implicit_diagonal);
+      x->clear_external();
+    }
+    if (t % 2) {  // contact-like loads on a few bodies: a force and an added SPD inertia
+      for (int i = 0; i < m.nb; i += 3) {
+        Vec6<S> f;
+        Mat6<S> A;
+        for (int r = 0; r < 6; ++r) f(r) = S(30 * n(rng));
+        for (int r = 0; r < 36; ++r) A.data()[r] = S(n(rng));
+        const Mat6<S> K = S(5) * A * A.transpose();
+        for (auto* x : {&d, &dp, &du}) {
+          x->fext[i] = f;
+          x->Kext[i] = K;
+          x->has_ext = true;
+        }
+      }
+    }
+    REQUIRE(aba(m, d, qs, qds, tau, a));
+    REQUIRE(aba(plain, dp, qs, qds, tau, b));
+    REQUIRE(aba(unplanned, du, qs, qds, tau, c));
+    worst = std::max({worst, double((a - b).norm() / b.norm()), double((c - b).norm() / b.norm())});
+  }
+  return worst;
+}
+
+// A random tree (parents before children) of free root, spherical, revolute and fixed joints.
+static Model<double, 24, 72> random_tree(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(0.2, 1.0);
+  Model<double, 24, 72> m;
+  const auto body = [&](int parent, JointType jt) {
+    Body<double> b;
+    b.parent = parent;
+    b.joint = jt;
+    b.pos = Vec3<double>(u(rng) - 0.6, u(rng) - 0.6, u(rng) - 0.6);
+    b.rot = Quat<double>(u(rng), u(rng) - 0.6, u(rng) - 0.6, u(rng) - 0.6).normalized();
+    b.axis = Vec3<double>(u(rng) - 0.6, u(rng) - 0.6, u(rng) - 0.6);
+    b.mass = 3 * u(rng);
+    b.com = Vec3<double>(u(rng) - 0.6, u(rng) - 0.6, u(rng) - 0.6) * 0.3;
+    b.inertia = Vec3<double>(u(rng), u(rng), u(rng)).asDiagonal() * 0.05;
+    b.kd = jt == JointType::Free ? 0.0 : 10 * u(rng);  // (the free root's damping is the root servo's)
+    b.armature = 0.01 * u(rng);
+    return b;
+  };
+  m.add_body("root", body(-1, JointType::Free));
+  const int n = 6 + int(rng() % 14);
+  for (int i = 1; i < n; ++i) {
+    const JointType jt = std::array<JointType, 4>{JointType::Spherical, JointType::Revolute, JointType::Spherical,
+                                                  JointType::Fixed}[rng() % 4];
+    REQUIRE(m.add_body("b" + std::to_string(i), body(int(rng() % i), jt)) == i);
+  }
+  return m;
+}
+
+TEST_CASE("ABA pass 2 pairs the humanoid's mirrored limbs and equals the plain order to rounding") {
+  const auto m = character::humanoid3d_like<double>();
+  CHECK(check_backward_plan(m) == 5);  // hips, knees, ankles, shoulders, elbows
+  for (int s = 0; s < m.num_backward_steps; ++s) {
+    const auto& st = m.backward_steps[s];
+    if (st[1] < 0) continue;
+    std::string a = m.names[st[0]], b = m.names[st[1]];
+    CHECK(a.substr(a.find('_')) == b.substr(b.find('_')));  // left_knee with right_knee
+  }
+  const auto avatar = character::default_avatar<double>();
+  const int avatar_pairs = check_backward_plan(avatar);
+  CHECK(avatar_pairs >= 8);
+  const double hd = paired_vs_plain<double>(m, 200, 21), hf = paired_vs_plain<float>(m, 200, 22);
+  const double ad = paired_vs_plain<double>(avatar, 200, 23), af = paired_vs_plain<float>(avatar, 200, 24);
+  std::printf("[aba-pairs] avatar: %d pairs of %d bodies; paired vs plain qdd, max rel: humanoid34 double %.1e float %.1e, "
+              "avatar double %.1e float %.1e\n",
+              avatar_pairs, avatar.nb, hd, hf, ad, af);
+  CHECK(hd <= 1e-12);
+  CHECK(ad <= 1e-12);
+  CHECK(hf <= 1e-4);
+  CHECK(af <= 1e-4);
+}
+
+TEST_CASE("ABA pass 2 plans any tree: every body once, children first, paired equals plain") {
+  std::mt19937 rng(31);
+  int pairs = 0;
+  double worst = 0;
+  for (int t = 0; t < 40; ++t) {
+    const auto m = random_tree(rng);
+    pairs += check_backward_plan(m);
+    const double e_pair = paired_vs_plain<double>(m, 5, 100 + t);
+    const double e_oracle = aba_vs_crba(m, 5, 1.0 / 120, 200 + t);  // and against the CRBA oracle
+    worst = std::max({worst, e_pair, e_oracle});
+  }
+  std::printf("[aba-pairs] 40 random trees (7-19 bodies): %d pairs; paired vs plain and vs CRBA, max rel err %.1e\n", pairs, worst);
+  CHECK(pairs > 40);
+  CHECK(worst <= 1e-9);
 }

@@ -21,6 +21,9 @@
 // External loads (Data::fext, Data::Kext, filled by contact): f = f_ext - K_ext a enters pass 2 as
 // I^A_i = I_i + K_ext_i and p^A_i = p_i - f_ext_i.
 #pragma once
+#include <array>
+#include <type_traits>
+
 #include "sparsebody/dynamics/kinematics.hpp"
 
 namespace sparsebody::dynamics {
@@ -49,8 +52,32 @@ inline void aba_forward_pass(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, cons
 }
 
 // ---- pass 2, one function per joint type -----------------------------------------------------------
-// (SPARSEBODY_INLINE: the per-joint functions are parts of one loop body, not calls.) Each writes U_i, D_i^-1, u_i into d and, when body i has a parent, I^a_i and p^a_i. False when
-// D_i is not positive (degenerate model or NaN).
+// (SPARSEBODY_INLINE: the per-joint functions are parts of one loop body, not calls.) Pass 2 steps
+// one body (N = 1, values S) or two at once (N = 2, values Lanes2<S>: lane k is body ids[k]; the
+// steps are Model::backward_steps): two bodies with the same joint go through the same arithmetic,
+// one per lane of an SSE2/NEON register, in the instructions of one. Each function writes U_i,
+// D_i^-1, u_i into d and, when the body has a parent, I^a_i and p^a_i (lower triangle) into Ia, pa.
+// False when a D_i is not positive (degenerate model or NaN).
+
+template <class S, int N>
+using Lane = std::conditional_t<N == 1, S, Lanes2<S>>;
+// The lane value whose lane k is f(k).
+template <class S, int N, class F>
+SPARSEBODY_INLINE Lane<S, N> gather(const F& f) {
+  if constexpr (N == 1) {
+    return f(0);
+  } else {
+    return Lanes2Of<S>::make(f(0), f(1));
+  }
+}
+template <int N, class V>
+SPARSEBODY_INLINE auto lane(const V& v, [[maybe_unused]] int k) {
+  if constexpr (N == 1) {
+    return v;
+  } else {
+    return v[k];
+  }
+}
 
 // Free root, S = 1_6: U = I^A, D = I^A + diag(k). Only its Cholesky factor is kept (pass 3 solves
 // with it); a free joint has no parent (Model validates this).
@@ -62,6 +89,20 @@ SPARSEBODY_INLINE bool free_root_articulated(const Body<S>& b, int i, Data<S, MB
   return cholesky_factor6(D, d.root_L, d.root_L_inv_diag);
 }
 
+// p^a = p^A + I^a c + w, the part every joint type shares (w = U D^-1 u).
+template <class S, int N, int MB, int MD>
+SPARSEBODY_INLINE void articulated_bias(const Data<S, MB, MD>& d, const int (&ids)[N], const Lane<S, N> (&Ia)[6][6],
+                                        const Lane<S, N> (&w)[6], Lane<S, N> (&pa)[6]) {
+  using V = Lane<S, N>;
+  V c[6];
+  SPARSEBODY_UNROLL for (int t = 0; t < 6; ++t) c[t] = gather<S, N>([&](int k) { return d.c[ids[k]](t); });
+  SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) {
+    V s = gather<S, N>([&](int k) { return d.pA[ids[k]](r); }) + w[r];
+    SPARSEBODY_UNROLL for (int t = 0; t < 6; ++t) s += (r >= t ? Ia[r][t] : Ia[t][r]) * c[t];
+    pa[r] = s;
+  }
+}
+
 // Spherical, S = [1_3; 0]: U = I^A S is the first three columns of I^A (read in place, in pass 3
 // too: I^A_i is final once body i is reached), D the top-left 3x3 block of I^A plus K = diag(k).
 // With A that block, U = [A; B^T] and D = A + K, the Schur complement I^a = I^A - U D^-1 U^T is
@@ -70,86 +111,157 @@ SPARSEBODY_INLINE bool free_root_articulated(const Body<S>& b, int i, Data<S, MB
 // (A D^-1 = 1 - K D^-1), and U D^-1 u = [u - K z; G^T u], z = D^-1 u: 40 % fewer products than
 // forming U D^-1, and no cancellation in I^a_AA (A - A D^-1 A is the difference of two near-equal
 // matrices when K is small).
-template <class S, int MB, int MD>
-SPARSEBODY_INLINE bool spherical_articulated(const Body<S>& b, int i, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
-                                  Mat6<S>& Ia, Vec6<S>& pa) {
-  const Mat6<S>& IA = d.IA[i];  // lower triangle (aba_backward_pass)
-  const Vec6<S>& pA = d.pA[i];
-  const int k = b.v_index;
-  const S kk[3] = {d.implicit_diagonal(k) + b.armature, d.implicit_diagonal(k + 1) + b.armature,
-                   d.implicit_diagonal(k + 2) + b.armature};
-  const S d00 = IA(0, 0) + kk[0];
-  S Di[3][3];  // D^-1
-  const S inv = inverse_sym3(d00, IA(1, 0), IA(2, 0), IA(1, 1) + kk[1], IA(2, 1), IA(2, 2) + kk[2], Di);
-  Mat3<S>& Dinv = d.Dinv[i];
-  SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c)
-    SPARSEBODY_UNROLL for (int r = 0; r < 3; ++r) Dinv(r, c) = Di[r][c];
-  const bool ok = d00 > S(0) && std::isfinite(inv) && inv > S(0);  // a positive pivot and determinant
-  const S u[3] = {tau(k) - pA(0), tau(k + 1) - pA(1), tau(k + 2) - pA(2)};  // u = tau - S^T p^A
-  d.u[i] = Vec3<S>(u[0], u[1], u[2]);
-  if (b.parent < 0) return ok;
-  S G[3][3];  // D^-1 B, B(r, c) = I^A(r, 3 + c) = IA(3 + c, r)
+template <int N, class S, int MB, int MD>
+SPARSEBODY_INLINE bool spherical_articulated(const Model<S, MB, MD>& m, const int (&ids)[N], Data<S, MB, MD>& d,
+                                             const typename Model<S, MB, MD>::VecV& tau, Lane<S, N> (&Ia)[6][6],
+                                             Lane<S, N> (&pa)[6]) {
+  using V = Lane<S, N>;
+  const auto IA = [&](int r, int c) { return gather<S, N>([&](int k) { return d.IA[ids[k]](r, c); }); };  // r >= c
+  V kk[3], u[3];  // K; u = tau - S^T p^A
+  SPARSEBODY_UNROLL for (int t = 0; t < 3; ++t) {
+    kk[t] = gather<S, N>([&](int k) {
+      const Body<S>& b = m.bodies[ids[k]];
+      return d.implicit_diagonal(b.v_index + t) + b.armature;
+    });
+    u[t] = gather<S, N>([&](int k) { return tau(m.bodies[ids[k]].v_index + t) - d.pA[ids[k]](t); });
+  }
+  const V d00 = IA(0, 0) + kk[0];
+  V Di[3][3];  // D^-1
+  const V inv = inverse_sym3(d00, IA(1, 0), IA(2, 0), IA(1, 1) + kk[1], IA(2, 1), IA(2, 2) + kk[2], Di);
+  bool ok = true;
+  for (int k = 0; k < N; ++k) {
+    const int i = ids[k];
+    Mat3<S>& Dinv = d.Dinv[i];
+    SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c)
+      SPARSEBODY_UNROLL for (int r = 0; r < 3; ++r) Dinv(r, c) = lane<N>(Di[r][c], k);
+    const S p = lane<N>(d00, k), q = lane<N>(inv, k);
+    ok = ok && p > S(0) && std::isfinite(q) && q > S(0);  // a positive pivot and determinant
+    d.u[i] = Vec3<S>(lane<N>(u[0], k), lane<N>(u[1], k), lane<N>(u[2], k));
+  }
+  if (N == 1 && m.bodies[ids[0]].parent < 0) return ok;
+  V G[3][3];  // D^-1 B, B(r, c) = I^A(r, 3 + c) = IA(3 + c, r)
   SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c)
     SPARSEBODY_UNROLL for (int r = 0; r < 3; ++r) G[r][c] = Di[r][0] * IA(3 + c, 0) + Di[r][1] * IA(3 + c, 1) + Di[r][2] * IA(3 + c, 2);
-  // I^a, lower triangle only (add_transformed_inertia_lower reads no more)
+  // I^a, lower triangle only (congruence_lower reads no more)
   SPARSEBODY_UNROLL for (int c = 0; c < 3; ++c) {
     SPARSEBODY_UNROLL for (int r = 0; r < 3; ++r) {
       if (r >= c) {
-        Ia(r, c) = (r == c ? kk[r] : S(0)) - kk[r] * kk[c] * Di[r][c];
-        Ia(3 + r, 3 + c) = sym_lower(IA, 3 + r, 3 + c) - (IA(3 + r, 0) * G[0][c] + IA(3 + r, 1) * G[1][c] + IA(3 + r, 2) * G[2][c]);
+        Ia[r][c] = -(kk[r] * kk[c] * Di[r][c]);
+        if (r == c) Ia[r][c] += kk[r];
+        const V Crc = 3 + r >= 3 + c ? IA(3 + r, 3 + c) : IA(3 + c, 3 + r);
+        Ia[3 + r][3 + c] = Crc - (IA(3 + r, 0) * G[0][c] + IA(3 + r, 1) * G[1][c] + IA(3 + r, 2) * G[2][c]);
       }
-      Ia(3 + c, r) = kk[r] * G[r][c];  // (K G)(r, c), stored transposed below the diagonal
+      Ia[3 + c][r] = kk[r] * G[r][c];  // (K G)(r, c), stored transposed below the diagonal
     }
   }
   // p^a = p^A + I^a c + U D^-1 u
-  const S z[3] = {Di[0][0] * u[0] + Di[0][1] * u[1] + Di[0][2] * u[2], Di[1][0] * u[0] + Di[1][1] * u[1] + Di[1][2] * u[2],
+  const V z[3] = {Di[0][0] * u[0] + Di[0][1] * u[1] + Di[0][2] * u[2], Di[1][0] * u[0] + Di[1][1] * u[1] + Di[1][2] * u[2],
                   Di[2][0] * u[0] + Di[2][1] * u[1] + Di[2][2] * u[2]};
-  const Vec6<S> Iac = mul6v_lower(Ia, d.c[i]);
+  V w[6];
   SPARSEBODY_UNROLL for (int r = 0; r < 3; ++r) {
-    pa(r) = pA(r) + Iac(r) + (u[r] - kk[r] * z[r]);
-    pa(3 + r) = pA(3 + r) + Iac(3 + r) + (G[0][r] * u[0] + G[1][r] * u[1] + G[2][r] * u[2]);
+    w[r] = u[r] - kk[r] * z[r];
+    w[3 + r] = G[0][r] * u[0] + G[1][r] * u[1] + G[2][r] * u[2];
   }
+  articulated_bias<S, N>(d, ids, Ia, w, pa);
   return ok;
 }
 
 // Revolute, S = [axis; 0]: U = I^A S (stored, column 0 of d.U), D = S^T U + k, a scalar.
-template <class S, int MB, int MD>
-SPARSEBODY_INLINE bool revolute_articulated(const Body<S>& b, int i, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
-                                 Mat6<S>& Ia, Vec6<S>& pa) {
-  const Mat6<S>& IA = d.IA[i];  // lower triangle (aba_backward_pass)
-  const Vec6<S>& pA = d.pA[i];
-  const S ax = b.axis.x(), ay = b.axis.y(), az = b.axis.z();
-  S Uc[6];
-  SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r)
-    Uc[r] = sym_lower(IA, r, 0) * ax + sym_lower(IA, r, 1) * ay + sym_lower(IA, r, 2) * az;
-  const S D = ax * Uc[0] + ay * Uc[1] + az * Uc[2] + d.implicit_diagonal(b.v_index) + b.armature;
-  const bool ok = D > S(0);
-  const S Dinv = S(1) / D;
-  SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) d.U[i](r, 0) = Uc[r];
-  d.Dinv[i](0, 0) = Dinv;
-  const S u = tau(b.v_index) - (ax * pA(0) + ay * pA(1) + az * pA(2));
-  d.u[i](0) = u;
-  if (b.parent < 0) return ok;
-  S UD[6];  // U D^-1
+template <int N, class S, int MB, int MD>
+SPARSEBODY_INLINE bool revolute_articulated(const Model<S, MB, MD>& m, const int (&ids)[N], Data<S, MB, MD>& d,
+                                            const typename Model<S, MB, MD>::VecV& tau, Lane<S, N> (&Ia)[6][6],
+                                            Lane<S, N> (&pa)[6]) {
+  using V = Lane<S, N>;
+  const auto IA = [&](int r, int c) {  // both triangles, from the lower one
+    return gather<S, N>([&](int k) { return r >= c ? d.IA[ids[k]](r, c) : d.IA[ids[k]](c, r); });
+  };
+  const V ax = gather<S, N>([&](int k) { return m.bodies[ids[k]].axis.x(); });
+  const V ay = gather<S, N>([&](int k) { return m.bodies[ids[k]].axis.y(); });
+  const V az = gather<S, N>([&](int k) { return m.bodies[ids[k]].axis.z(); });
+  V Uc[6];
+  SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) Uc[r] = IA(r, 0) * ax + IA(r, 1) * ay + IA(r, 2) * az;
+  const V D = ax * Uc[0] + ay * Uc[1] + az * Uc[2] + gather<S, N>([&](int k) {
+                const Body<S>& b = m.bodies[ids[k]];
+                return d.implicit_diagonal(b.v_index) + b.armature;
+              });
+  const V Dinv = 1 / D;
+  const V u = gather<S, N>([&](int k) {
+    const Body<S>& b = m.bodies[ids[k]];
+    const Vec6<S>& pA = d.pA[ids[k]];
+    return tau(b.v_index) - (b.axis.x() * pA(0) + b.axis.y() * pA(1) + b.axis.z() * pA(2));
+  });
+  bool ok = true;
+  for (int k = 0; k < N; ++k) {
+    const int i = ids[k];
+    SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) d.U[i](r, 0) = lane<N>(Uc[r], k);
+    d.Dinv[i](0, 0) = lane<N>(Dinv, k);
+    d.u[i](0) = lane<N>(u, k);
+    ok = ok && lane<N>(D, k) > S(0);
+  }
+  if (N == 1 && m.bodies[ids[0]].parent < 0) return ok;
+  V UD[6];  // U D^-1
   SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) UD[r] = Uc[r] * Dinv;
   SPARSEBODY_UNROLL for (int c = 0; c < 6; ++c)  // I^a = I^A - U D^-1 U^T, lower triangle
     SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r)
-      if (r >= c) Ia(r, c) = IA(r, c) - UD[r] * Uc[c];
-  const Vec6<S> Iac = mul6v_lower(Ia, d.c[i]);
-  SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) pa(r) = pA(r) + Iac(r) + UD[r] * u;
+      if (r >= c) Ia[r][c] = IA(r, c) - UD[r] * Uc[c];
+  V w[6];
+  SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) w[r] = UD[r] * u;
+  articulated_bias<S, N>(d, ids, Ia, w, pa);
   return ok;
 }
 
-// Fixed, S empty: I^a = I^A, p^a = p^A + I^A c.
-template <class S, int MB, int MD>
-SPARSEBODY_INLINE void fixed_articulated(int i, const Data<S, MB, MD>& d, Mat6<S>& Ia, Vec6<S>& pa) {
-  Ia = d.IA[i];
-  pa = d.pA[i] + mul6v_lower(d.IA[i], d.c[i]);
+// I^A_lambda += X^T I^a X and p^A_lambda += X^T p^a for each lane's body.
+template <class S, int N, int MB, int MD>
+SPARSEBODY_INLINE void add_to_parents(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const int (&ids)[N],
+                                      const Lane<S, N> (&Ia)[6][6], const Lane<S, N> (&pa)[6]) {
+  using V = Lane<S, N>;
+  congruence_lower<V>([&](int r, int c) { return gather<S, N>([&](int k) { return d.X[ids[k]].E(r, c); }); },
+                      gather<S, N>([&](int k) { return d.X[ids[k]].r.x(); }),
+                      gather<S, N>([&](int k) { return d.X[ids[k]].r.y(); }),
+                      gather<S, N>([&](int k) { return d.X[ids[k]].r.z(); }), [&](int r, int c) { return Ia[r][c]; },
+                      [&](int r, int c, V x) {
+                        for (int k = 0; k < N; ++k) d.IA[m.bodies[ids[k]].parent](r, c) += lane<N>(x, k);
+                      });
+  for (int k = 0; k < N; ++k) {
+    S f[6], o[6];
+    SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) f[r] = lane<N>(pa[r], k);
+    d.X[ids[k]].apply_transpose_force(f, o);
+    Vec6<S>& pA = d.pA[m.bodies[ids[k]].parent];
+    SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) pA(r) += o[r];
+  }
 }
 
-// Pass 2: I^A_i and p^A_i from the leaves to the root, after pass 1 (p_i in d.bias). I^A and I^a
-// are symmetric and kept in their lower triangles only (add_transformed_inertia_lower): the upper
-// triangles of d.IA are not updated and must not be read.
+// One step of pass 2: body ids[0], or the pair (ids[0], ids[1]) with the same joint type.
+template <int N, class S, int MB, int MD>
+SPARSEBODY_INLINE bool articulated_step(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau,
+                                        const int (&ids)[N]) {
+  using V = Lane<S, N>;
+  const Body<S>& b = m.bodies[ids[0]];
+  V Ia[6][6], pa[6];  // I^a_i, p^a_i, passed to the parent
+  bool ok = true;
+  switch (b.joint) {
+    case JointType::Free: return free_root_articulated(b, ids[0], d);
+    case JointType::Spherical: ok = spherical_articulated<N>(m, ids, d, tau, Ia, pa); break;
+    case JointType::Revolute: ok = revolute_articulated<N>(m, ids, d, tau, Ia, pa); break;
+    case JointType::Fixed:
+    default: {  // S empty: I^a = I^A, p^a = p^A + I^A c
+      if (b.parent < 0) return true;
+      SPARSEBODY_UNROLL for (int c = 0; c < 6; ++c)
+        SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r)
+          if (r >= c) Ia[r][c] = gather<S, N>([&](int k) { return d.IA[ids[k]](r, c); });
+      const V w[6] = {};
+      articulated_bias<S, N>(d, ids, Ia, w, pa);
+      break;
+    }
+  }
+  if (b.parent >= 0) add_to_parents<S, N>(m, d, ids, Ia, pa);
+  return ok;
+}
+
+// Pass 2: I^A_i and p^A_i from the leaves to the root, after pass 1 (p_i in d.bias), in the steps
+// Model::finalize planned (two bodies at once where it could pair them). I^A and I^a are symmetric
+// and kept in their lower triangles only (congruence_lower): the upper triangles of d.IA are not
+// updated and must not be read.
 template <class S, int MB, int MD>
 inline bool aba_backward_pass(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, const typename Model<S, MB, MD>::VecV& tau) {
   for (int i = 0; i < m.nb; ++i) {
@@ -161,25 +273,20 @@ inline bool aba_backward_pass(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, con
     }
   }
   bool ok = true;
-  for (int i = m.nb - 1; i >= 0; --i) {
-    const Body<S>& b = m.bodies[i];
-    Mat6<S> Ia;  // I^a_i, passed to the parent
-    Vec6<S> pa;  // p^a_i
-    switch (b.joint) {
-      case JointType::Free: ok = free_root_articulated(b, i, d) && ok; continue;
-      case JointType::Spherical: ok = spherical_articulated(b, i, d, tau, Ia, pa) && ok; break;
-      case JointType::Revolute: ok = revolute_articulated(b, i, d, tau, Ia, pa) && ok; break;
-      case JointType::Fixed:
-      default:
-        if (b.parent >= 0) fixed_articulated(i, d, Ia, pa);
-        break;
+  if (m.backward_steps_nb != m.nb) {  // no plan for this tree (bodies edited without finalize): one at a time
+    for (int i = m.nb - 1; i >= 0; --i) ok = articulated_step<1>(m, d, tau, {i}) && ok;
+    return ok;
+  }
+  for (int s = 0; s < m.num_backward_steps; ++s) {
+    const std::array<int, 2>& st = m.backward_steps[s];
+    if constexpr (Lanes2Of<S>::vector) {
+      if (st[1] >= 0) {
+        ok = articulated_step<2>(m, d, tau, {st[0], st[1]}) && ok;
+        continue;
+      }
     }
-    if (b.parent < 0) continue;
-    add_transformed_inertia_lower(d.X[i], Ia, d.IA[b.parent]);  // I^A_lambda += X^T I^a X
-    S o[6];  // p^A_lambda += X^T p^a
-    d.X[i].apply_transpose_force(pa.data(), o);
-    Vec6<S>& pA = d.pA[b.parent];
-    SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) pA(r) += o[r];
+    ok = articulated_step<1>(m, d, tau, {st[0]}) && ok;
+    if (st[1] >= 0) ok = articulated_step<1>(m, d, tau, {st[1]}) && ok;
   }
   return ok;
 }

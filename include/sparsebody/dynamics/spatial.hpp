@@ -36,17 +36,20 @@ struct Lanes2Of {
     friend type operator*(S a, type b) { return {{a * b.v[0], a * b.v[1]}}; }
   };
   static type make(S a, S b) { return {{a, b}}; }
+  static constexpr bool vector = false;  // a plain pair: code with a one-lane form uses that instead
 };
 #if defined(__GNUC__) || defined(__clang__)
 template <>
 struct Lanes2Of<double> {
   typedef double type __attribute__((vector_size(16)));
   static type make(double a, double b) { return type{a, b}; }
+  static constexpr bool vector = true;
 };
 template <>
 struct Lanes2Of<float> {
   typedef float type __attribute__((vector_size(8)));
   static type make(float a, float b) { return type{a, b}; }
+  static constexpr bool vector = true;
 };
 #endif
 template <class S>
@@ -170,11 +173,11 @@ SPARSEBODY_INLINE Mat3<S> mul_t33(const Mat3<S>& A, const Mat3<S>& B) {  // A^T 
 }
 // Inverse of a symmetric 3x3 matrix by cofactors (D_i of a spherical joint is SPD), from its lower
 // triangle (a, b, c, e, f, g) = (D00, D10, D20, D11, D21, D22) into R (both triangles). Returns
-// 1 / det(D). Plain arrays so that ABA keeps D^-1 in registers.
+// 1 / det(D). Plain arrays so that ABA keeps D^-1 in registers. S may be Lanes2 (two matrices).
 template <class S>
 SPARSEBODY_INLINE S inverse_sym3(S a, S b, S c, S e, S f, S g, S (&R)[3][3]) noexcept {
   const S A = e * g - f * f, B = c * f - b * g, C = b * f - c * e;
-  const S inv = S(1) / (a * A + b * B + c * C);
+  const S inv = 1 / (a * A + b * B + c * C);
   R[0][0] = A * inv;
   R[1][0] = R[0][1] = B * inv;
   R[2][0] = R[0][2] = C * inv;
@@ -248,21 +251,23 @@ SPARSEBODY_INLINE S sym_lower(const Mat6<S>& M, int r, int c) noexcept {
 // out's lower triangle, never touching either upper triangle (ABA's pass 2 keeps I^A this way:
 // 21 instead of 36 entries read and written per body). Every loop has a constant trip count and
 // is unrolled, so the triangle tests fold away and the kernel is straight-line code.
-template <class S>
-SPARSEBODY_INLINE void add_transformed_inertia_lower(const Transform<S>& X, const Mat6<S>& I, Mat6<S>& out) noexcept {
-  const Mat3<S>& E = X.E;
-  const S rx = X.r.x(), ry = X.r.y(), rz = X.r.z();
-  // I = [A B; B^T C]: A(i,k) = sym_lower(I, i, k), B(i,k) = I(3+k, i), C(i,k) = sym_lower(I, 3+i, 3+k)
-  S AE[3][3], BE[3][3], CE[3][3];  // A E, B E, C E
+// The arithmetic is written once on lane values V: S for one body, Lanes2<S> for two bodies at once
+// (ABA's paired pass 2). E(r, c) gives E's entries, I(r, c) I's lower triangle (r >= c), and
+// add(r, c, x) takes the increments of out's lower triangle.
+template <class V, class EAt, class IAt, class AddAt>
+SPARSEBODY_INLINE void congruence_lower(const EAt& E, V rx, V ry, V rz, const IAt& I, const AddAt& add) noexcept {
+  const auto Is = [&](int r, int c) { return r >= c ? I(r, c) : I(c, r); };
+  // I = [A B; B^T C]: A(i,k) = Is(i, k), B(i,k) = I(3+k, i), C(i,k) = Is(3+i, 3+k)
+  V AE[3][3], BE[3][3], CE[3][3];  // A E, B E, C E
   SPARSEBODY_UNROLL for (int j = 0; j < 3; ++j) {
-    const S e0 = E(0, j), e1 = E(1, j), e2 = E(2, j);
+    const V e0 = E(0, j), e1 = E(1, j), e2 = E(2, j);
     SPARSEBODY_UNROLL for (int i = 0; i < 3; ++i) {
-      AE[i][j] = sym_lower(I, i, 0) * e0 + sym_lower(I, i, 1) * e1 + sym_lower(I, i, 2) * e2;
+      AE[i][j] = Is(i, 0) * e0 + Is(i, 1) * e1 + Is(i, 2) * e2;
       BE[i][j] = I(3, i) * e0 + I(4, i) * e1 + I(5, i) * e2;
-      CE[i][j] = sym_lower(I, 3 + i, 3) * e0 + sym_lower(I, 3 + i, 4) * e1 + sym_lower(I, 3 + i, 5) * e2;
+      CE[i][j] = Is(3 + i, 3) * e0 + Is(3 + i, 4) * e1 + Is(3 + i, 5) * e2;
     }
   }
-  S a[3][3], b[3][3], c[3][3];  // A' = E^T A E (lower), B' = E^T B E, C' = E^T C E (both triangles)
+  V a[3][3], b[3][3], c[3][3];  // A' = E^T A E (lower), B' = E^T B E, C' = E^T C E (both triangles)
   SPARSEBODY_UNROLL for (int j = 0; j < 3; ++j)
     SPARSEBODY_UNROLL for (int i = 0; i < 3; ++i) {
       b[i][j] = E(0, i) * BE[0][j] + E(1, i) * BE[1][j] + E(2, i) * BE[2][j];
@@ -271,7 +276,7 @@ SPARSEBODY_INLINE void add_transformed_inertia_lower(const Transform<S>& X, cons
         c[i][j] = c[j][i] = E(0, i) * CE[0][j] + E(1, i) * CE[1][j] + E(2, i) * CE[2][j];
       }
     }
-  S rc[3][3], rb[3][3];  // r^ C', r^ B'^T
+  V rc[3][3], rb[3][3];  // r^ C', r^ B'^T
   SPARSEBODY_UNROLL for (int j = 0; j < 3; ++j) {
     rc[0][j] = ry * c[2][j] - rz * c[1][j];
     rc[1][j] = rz * c[0][j] - rx * c[2][j];
@@ -282,16 +287,21 @@ SPARSEBODY_INLINE void add_transformed_inertia_lower(const Transform<S>& X, cons
   }
   SPARSEBODY_UNROLL for (int j = 0; j < 3; ++j) {
     // A_p = A' + r^ B'^T + (r^ B'^T)^T + r^ (r^ C')^T; column j of the last is r x (row j of r^ C')
-    const S q0 = rc[j][0], q1 = rc[j][1], q2 = rc[j][2];
-    const S rcr[3] = {ry * q2 - rz * q1, rz * q0 - rx * q2, rx * q1 - ry * q0};
+    const V q0 = rc[j][0], q1 = rc[j][1], q2 = rc[j][2];
+    const V rcr[3] = {ry * q2 - rz * q1, rz * q0 - rx * q2, rx * q1 - ry * q0};
     SPARSEBODY_UNROLL for (int i = 0; i < 3; ++i) {
       if (i >= j) {
-        out(i, j) += a[i][j] + rb[i][j] + rb[j][i] + rcr[i];
-        out(3 + i, 3 + j) += c[i][j];
+        add(i, j, a[i][j] + rb[i][j] + rb[j][i] + rcr[i]);
+        add(3 + i, 3 + j, c[i][j]);
       }
-      out(3 + j, i) += b[i][j] + rc[i][j];  // B_p = B' + r^ C', stored as its transpose below the diagonal
+      add(3 + j, i, b[i][j] + rc[i][j]);  // B_p = B' + r^ C', stored as its transpose below the diagonal
     }
   }
+}
+template <class S>
+SPARSEBODY_INLINE void add_transformed_inertia_lower(const Transform<S>& X, const Mat6<S>& I, Mat6<S>& out) noexcept {
+  congruence_lower<S>([&](int r, int c) { return X.E(r, c); }, X.r.x(), X.r.y(), X.r.z(),
+                      [&](int r, int c) { return I(r, c); }, [&](int r, int c, S x) { out(r, c) += x; });
 }
 
 // out += X^T I X for a symmetric I (articulated or rigid inertia) and a symmetric out, both
