@@ -59,26 +59,6 @@ inline void aba_forward_pass(const Model<S, MB, MD>& m, Data<S, MB, MD>& d, cons
 // D_i^-1, u_i into d and, when the body has a parent, I^a_i and p^a_i (lower triangle) into Ia, pa.
 // False when a D_i is not positive (degenerate model or NaN).
 
-template <class S, int N>
-using Lane = std::conditional_t<N == 1, S, Lanes2<S>>;
-// The lane value whose lane k is f(k).
-template <class S, int N, class F>
-SPARSEBODY_INLINE Lane<S, N> gather(const F& f) {
-  if constexpr (N == 1) {
-    return f(0);
-  } else {
-    return Lanes2Of<S>::make(f(0), f(1));
-  }
-}
-template <int N, class V>
-SPARSEBODY_INLINE auto lane(const V& v, [[maybe_unused]] int k) {
-  if constexpr (N == 1) {
-    return v;
-  } else {
-    return v[k];
-  }
-}
-
 // Free root, S = 1_6: U = I^A, D = I^A + diag(k). Only its Cholesky factor is kept (pass 3 solves
 // with it); a free joint has no parent (Model validates this).
 template <class S, int MB, int MD>

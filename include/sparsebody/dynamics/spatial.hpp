@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cmath>
+#include <type_traits>
 
 // Full unrolling of the small fixed-trip loops of the hot kernels (GCC leaves triangular nests rolled).
 #if defined(__GNUC__) || defined(__clang__)
@@ -54,6 +55,28 @@ struct Lanes2Of<float> {
 #endif
 template <class S>
 using Lanes2 = typename Lanes2Of<S>::type;
+
+// Code written once for one body (N = 1, values S) and for two at once (N = 2, values Lanes2<S>,
+// lane k holding body k's value): ABA's paired steps (Model::backward_steps).
+template <class S, int N>
+using Lane = std::conditional_t<N == 1, S, Lanes2<S>>;
+// The lane value whose lane k is f(k).
+template <class S, int N, class F>
+SPARSEBODY_INLINE Lane<S, N> gather(const F& f) {
+  if constexpr (N == 1) {
+    return f(0);
+  } else {
+    return Lanes2Of<S>::make(f(0), f(1));
+  }
+}
+template <int N, class V>
+SPARSEBODY_INLINE auto lane(const V& v, [[maybe_unused]] int k) {
+  if constexpr (N == 1) {
+    return v;
+  } else {
+    return v[k];
+  }
+}
 
 template <class S> using Vec3 = Eigen::Matrix<S, 3, 1>;
 template <class S> using Vec6 = Eigen::Matrix<S, 6, 1>;
@@ -388,13 +411,13 @@ SPARSEBODY_INLINE Vec6<S> cross_force(const Vec6<S>& v, const Vec6<S>& f) {
 // (E(i, j) = e[i + 3 j]).
 template <class S>
 SPARSEBODY_INLINE void quat_to_transposed_rotation(S w, S x, S y, S z, S* e) noexcept {
-  const S s = S(2) / (w * w + x * x + y * y + z * z);
+  const S s = 2 / (w * w + x * x + y * y + z * z);  // (S may be Lanes2)
   const S xx = s * x * x, yy = s * y * y, zz = s * z * z;
   const S xy = s * x * y, xz = s * x * z, yz = s * y * z;
   const S wx = s * w * x, wy = s * w * y, wz = s * w * z;
-  e[0] = S(1) - yy - zz; e[3] = xy + wz;         e[6] = xz - wy;
-  e[1] = xy - wz;         e[4] = S(1) - xx - zz; e[7] = yz + wx;
-  e[2] = xz + wy;         e[5] = yz - wx;         e[8] = S(1) - xx - yy;
+  e[0] = 1 - yy - zz; e[3] = xy + wz;     e[6] = xz - wy;
+  e[1] = xy - wz;     e[4] = 1 - xx - zz; e[7] = yz + wx;
+  e[2] = xz + wy;     e[5] = yz - wx;     e[8] = 1 - xx - yy;
 }
 
 // Quaternion exponential map: rotation by the rotation vector w (angle |w|), exact for all |w|.
