@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds and runs the tests that cover every weight storage path (tests/nn: layers, float/f16/int8
 # storage, every int8 kernel against the portable one; tests/determinism: whole LoBSTr and
-# Neural3Points pipelines with float, f16 and int8 weights) for targets other than this machine:
+# Neural3Points pipelines with float, f16 and int8 weights) and the dynamics (tests/dynamics: ABA's
+# two-lane steps are SSE2 or NEON vectors) for targets other than this machine:
 #   x86-64-v3 (AVX2 + F16C + FMA), x86-64 (baseline SSE2: the generic, portable paths),
 #   ARM64 with the dot product (armv8.2-a+dotprod, qemu -cpu max) and without (armv8-a, qemu -cpu
 #   cortex-a53; tests/nn only: the pipelines under qemu take ~3 minutes and run in the first ARM64 build).
@@ -11,7 +12,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
 common=(-DCMAKE_BUILD_TYPE=Release -DSPARSEBODY_BUILD_BENCH=OFF -DSPARSEBODY_BUILD_EXAMPLES=OFF
-        -DSPARSEBODY_INSTALL=OFF "-DSPARSEBODY_TEST_DIRS=nn;determinism" -DSPARSEBODY_PYTHON_TESTS=OFF
+        -DSPARSEBODY_INSTALL=OFF "-DSPARSEBODY_TEST_DIRS=nn;determinism;dynamics" -DSPARSEBODY_PYTHON_TESTS=OFF
         -DSPARSEBODY_BUILD_PYTHON=OFF
         -DSPARSEBODY_BUILD_C_API=OFF)  # the C API library is built and tested by the main build (tests/capi)
 arm=(-DCMAKE_TOOLCHAIN_FILE=.ci/aarch64-linux-gnu.cmake)

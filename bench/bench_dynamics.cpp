@@ -181,11 +181,22 @@ void BM_ABA_Avatar(benchmark::State& st) { run_aba(st, avatar()); }
 void BM_RNEA_Avatar(benchmark::State& st) { run_rnea(st, avatar()); }
 void BM_CRBA_Avatar(benchmark::State& st) { run_crba(st, avatar()); }
 void BM_Step_Avatar(benchmark::State& st) { run_step(st, avatar()); }
+// ABA with pass 2 one body at a time (Model::plan_backward_steps(false)): what the paired steps save.
+template <class M>
+M one_body_steps(const M& m) {
+  M o = m;
+  o.plan_backward_steps(false);
+  return o;
+}
+void BM_ABAOneBodySteps_Humanoid34(benchmark::State& st) { run_aba(st, one_body_steps(h34())); }
+void BM_ABAOneBodySteps_Avatar(benchmark::State& st) { run_aba(st, one_body_steps(avatar())); }
 BENCHMARK(BM_ABA_Humanoid34);
+BENCHMARK(BM_ABAOneBodySteps_Humanoid34);
 BENCHMARK(BM_RNEA_Humanoid34);
 BENCHMARK(BM_CRBA_Humanoid34);
 BENCHMARK(BM_Step_Humanoid34);
 BENCHMARK(BM_ABA_Avatar);
+BENCHMARK(BM_ABAOneBodySteps_Avatar);
 BENCHMARK(BM_RNEA_Avatar);
 BENCHMARK(BM_CRBA_Avatar);
 BENCHMARK(BM_Step_Avatar);
@@ -505,6 +516,8 @@ int run_with_ratios(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   using sparsebody_bench::add_ratio;
+  add_ratio("ABA 34-DoF: one-body pass-2 steps / paired", "BM_ABAOneBodySteps_Humanoid34", "BM_ABA_Humanoid34");
+  add_ratio("ABA avatar: one-body pass-2 steps / paired", "BM_ABAOneBodySteps_Avatar", "BM_ABA_Avatar");
 #ifdef SPARSEBODY_HAVE_RBDL
   RbdlPeer check(h34());
   if (!rbdl_matches(check)) {

@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <cstdio>
 #include <optional>
+#include <type_traits>
+#include <utility>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -62,6 +64,12 @@ bool fit_user(const Options& o, const Input& in, Pipeline& pipe, SetScale&& set_
 
 // The calibration the run ended with, said honestly: the standing window it found (input frames and
 // times), a refusal, or none (the default body). Nothing for trackers at the joints.
+// Pipelines with a stand-up detector (trackers/stand_up.hpp; QuestSim has none).
+template <class P, class = void>
+struct has_stand_ups : std::false_type {};
+template <class P>
+struct has_stand_ups<P, std::void_t<decltype(std::declval<const P&>().stand_ups())>> : std::true_type {};
+
 template <class Pipeline>
 void print_calibration(const Options& o, const Input& in, const Pipeline& pipe) {
   namespace f = sparsebody::features;
@@ -163,6 +171,11 @@ std::optional<Metrics> stream(const Options& o, Input& in, Pipeline& pipe, Shown
   if (pipe.controller_swaps() > 0)
     std::printf("swap    the controllers were held in the other hands (left / right crossed while hanging): exchanged %s%s\n",
                 pipe.controllers_swapped() ? "from then on" : "and back", pipe.controller_swaps() > 2 ? " (several times)" : "");
+  if constexpr (has_stand_ups<Pipeline>::value) {
+    if (pipe.stand_ups() > 0)
+      std::printf("stand-up %lld time%s the user stood up from a seat: the model restarted there, the feet unheld for 1 s\n",
+                  pipe.stand_ups(), pipe.stand_ups() == 1 ? "" : "s");
+  }
   print_calibration(o, in, pipe);
   if (viewer) {
     nlohmann::json info = {{"input", o.input}, {"model", in.model}, {"fps", fps}, {"user_scale", pipe.user_scale()},

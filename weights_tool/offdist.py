@@ -28,6 +28,9 @@ against the clip that drove it, the same way for every input path:
   seated   devices through the CSV path, the session starting seated: 5 s with the headset 0.42 m lower
            and 0.1 m ahead (4 mm of sway), the belt 0.47 m lower, the controllers on the lap (0.3 m
            ahead, 0.62 m high), a 1.5 s stand-up, then the devices session (seated_start)
+  lookdown devices through the CSV path, the user looking down 25 deg (at the controllers) through
+           the session's first stand: the headset pitched about the head joint for 2 s, a 0.5 s look
+           up, then the session (look_down_at_start)
   cmu      the CMU clips of Debian's assimp-testmodels (another performer, another skeleton)
 
 Metrics (12 joints mapped by role: hips, head, hands, thighs, knees, ankles, toes; metres -> cm):
@@ -188,9 +191,11 @@ def run_demo(demo, src, out, model, extra, trackers_out=None):
 
 
 DEVICES = ["--devices", "--devices-stand", "0"]  # a session that starts with the user standing 2.5 s
-CSV_MODES = ("csv", "csvstop", "swapped", "noisy", "table", "seated")
+CSV_MODES = ("csv", "csvstop", "swapped", "noisy", "table", "seated", "lookdown")
 TABLE_SECONDS, PICKUP_SECONDS = 3.0, 0.5  # table mode: controllers on the table, then picked up
 SEATED_SECONDS, STANDUP_SECONDS = 5.0, 1.5  # seated mode: seated, then standing up
+LOOKDOWN_DEGREES, LOOKDOWN_SECONDS, LOOKUP_SECONDS = 25.0, 2.0, 0.5  # lookdown mode
+EYE_OPENXR = np.array([0.0, 0.08, -0.10])  # the device model's eye point e in the headset's OpenXR frame (-Z ahead)
 NOISE_POSITION = (0.0003, 0.001, 0.001, 0.001)  # m, sigma per axis: headset, left, right, belt
 NOISE_ORIENTATION = np.radians(0.2)              # rad, sigma per axis
 
@@ -312,6 +317,32 @@ def seated_start(path, seconds=SEATED_SECONDS, rise=STANDUP_SECONDS, drop=0.42, 
     csv.write(path)
 
 
+def _qrot(q, v):
+    """v rotated by unit quaternions q [..., 4] (x y z w)."""
+    u, w = q[..., :3], q[..., 3:]
+    t = 2 * np.cross(u, v)
+    return v + w * t + np.cross(u, t)
+
+
+def look_down_at_start(path, degrees=LOOKDOWN_DEGREES, seconds=LOOKDOWN_SECONDS, lookup=LOOKUP_SECONDS):
+    """Pitches a tracker CSV's headset down by `degrees` about the head joint for its first `seconds`,
+    then back to the session's own in a smoothstep of `lookup` s: a user who looks down at the
+    controllers while standing at the start (the devices session's stand), then looks up. The head
+    joint is the headset less the device model's eye offset; the other trackers are unchanged."""
+    csv = _TrackerCsv(path)
+    t = csv.rows[:, 0] - csv.rows[0, 0]
+    a = np.clip((seconds + lookup - t) / lookup, 0.0, 1.0)
+    a = a * a * (3 - 2 * a)  # 1 looking down, 0 the session's own
+    P, Q = csv.index("head", "p"), csv.index("head", "q")
+    q = csv.rows[:, Q] / np.linalg.norm(csv.rows[:, Q], axis=1, keepdims=True)
+    joint = csv.rows[:, P] - _qrot(q, EYE_OPENXR)
+    half = -0.5 * np.radians(degrees) * a  # about the headset's +X (right): -Z ahead turns down
+    q2 = _qmul(q, np.stack([np.sin(half), 0 * half, 0 * half, np.cos(half)], axis=-1))
+    csv.rows[:, Q] = q2
+    csv.rows[:, P] = joint + _qrot(q2, EYE_OPENXR)
+    csv.write(path)
+
+
 def swap_hand_columns(path):
     """Exchanges the left and right controllers of a tracker CSV by renaming its header's columns."""
     with open(path) as f:
@@ -331,7 +362,7 @@ def mode_inputs(mode, val_dir, every, tmp):
         return files, DEVICES, files
     if mode in ("csv", "csvstop"):  # the user walks from the first frame and stands half-way through the clip
         return files, ["--devices"], files
-    if mode in ("swapped", "noisy", "table", "seated"):
+    if mode in ("swapped", "noisy", "table", "seated", "lookdown"):
         return files, DEVICES, files
     if mode == "cmu":
         return [f for f in CMU if os.path.exists(f)], [], [f for f in CMU if os.path.exists(f)]
@@ -401,6 +432,8 @@ def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None, sb=No
                     controllers_on_a_table(csv)
                 if mode == "seated":
                     seated_start(csv)
+                if mode == "lookdown":
+                    look_down_at_start(csv)
                 rc, res = module_run(sb, csv, model, extra)
             else:
                 rc, res = module_run(sb, s, model, opts_c + extra)
@@ -422,6 +455,8 @@ def evaluate(demo, val_dir, mode, model, every, extra, tmp, per_clip=None, sb=No
                     controllers_on_a_table(csv)
                 if mode == "seated":
                     seated_start(csv)
+                if mode == "lookdown":
+                    look_down_at_start(csv)
                 rc, log = run_demo(demo, csv, out, model, extra)
             else:
                 rc, log = run_demo(demo, s, out, model, opts_c + extra)

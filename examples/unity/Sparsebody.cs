@@ -94,6 +94,8 @@ public unsafe struct CalibrationReport {
   public long framesUsed;
   public double stature, eyeHeight, scale, floor, confidence, firstTime, lastTime;
   public fixed byte message[192];
+  public fixed int gripDefault[2];  // 1 while that controller (0 left, 1 right) has the device model's grip offset
+  public int gripsNotHeld;          // standing windows whose controllers were not held
   public string Message {
     get { fixed (byte* m = message) return Marshal.PtrToStringAnsi((IntPtr)m); }
   }
@@ -142,6 +144,7 @@ public static class Native {
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_pipeline_frame_rate(PipelineHandle p, out double fps);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_pipeline_recalibrate(PipelineHandle p);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_pipeline_stream_events(PipelineHandle p, out int recentres, out int controllerSwaps, out int controllersSwapped);
+  [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_pipeline_stand_ups(PipelineHandle p, out long standUps);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_pipeline_calibrate_frame(PipelineHandle p, ref TrackerFrame f);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_pipeline_set_joint_calibration(PipelineHandle p, double scale);
   [DllImport(Lib, CallingConvention = CallingConvention.Cdecl)] public static extern Status sb_pipeline_calibration(PipelineHandle p, ref CalibrationReport r);
@@ -272,6 +275,8 @@ public sealed class Pipeline : IDisposable {
   public int Recentres { get { int r, c, w; Check(Native.sb_pipeline_stream_events(Handle, out r, out c, out w), Handle); return r; } }
   public int ControllerSwaps { get { int r, c, w; Check(Native.sb_pipeline_stream_events(Handle, out r, out c, out w), Handle); return c; } }
   public bool ControllersSwapped { get { int r, c, w; Check(Native.sb_pipeline_stream_events(Handle, out r, out c, out w), Handle); return w != 0; } }
+  // Stand-ups found so far (the user stood up from a seat: the model restarted there).
+  public long StandUps { get { long n; Check(Native.sb_pipeline_stand_ups(Handle, out n), Handle); return n; } }
   public void CalibrateFrame(ref TrackerFrame f) { Check(Native.sb_pipeline_calibrate_frame(Handle, ref f), Handle); }
   public void SetJointCalibration(double scale) { Check(Native.sb_pipeline_set_joint_calibration(Handle, scale), Handle); }
   public CalibrationReport Calibration {

@@ -165,6 +165,7 @@ static class CSharpTest {
       var p = new Pipeline(w, PipelineKind.N3PDirect);
       Expect(p.JointName(0).Length > 0 && p.JointParents()[0] == -1 && p.FrameRate == 30, "skeleton queries");
       Expect(p.Recentres == 0 && p.ControllerSwaps == 0 && !p.ControllersSwapped, "stream events before any input");
+      Expect(p.StandUps == 0, "no stand-up before any input");
       var f = TrackerFrame.Create();
       f.structSize = 4;
       try { p.Push(ref f); Expect(false, "wrong struct size pushed"); }

@@ -141,6 +141,7 @@ class Pipeline {
   virtual double user_scale() const = 0;
   virtual int recentres() const = 0;         // trackers/recenter.hpp
   virtual int controller_swaps() const = 0;  // trackers/controller_swap.hpp
+  virtual long long stand_ups() const = 0;   // trackers/stand_up.hpp
   virtual void set_scale(double s) = 0;
   virtual bool calibrate(const trackers::TrackerFrame& f) = 0;
   virtual void recalibrate() = 0;
@@ -174,6 +175,7 @@ class PipelineOf : public Pipeline {
   double user_scale() const override { return p_.user_scale(); }
   int recentres() const override { return p_.recentres(); }
   int controller_swaps() const override { return p_.controller_swaps(); }
+  long long stand_ups() const override { return p_.stand_ups(); }
   void set_scale(double s) override {
     if constexpr (pymod::detail::is_physics<P>::value || std::is_same_v<std::decay_t<decltype(p_.calibration())>, features::n3p::N3PCalibration>) {
       features::n3p::N3PCalibration c;  // as the demo's set_n3p_scale
@@ -607,9 +609,12 @@ PYBIND11_MODULE(sparsebody, m) {
              p.prev_time = -std::numeric_limits<double>::infinity();
            }, "Back to the constructed state (an explicit calibration is kept).")
       .def("calibration_report", [](const Pipeline& p) { return report_dict(p.report()); })
+
       .def("summary", &Pipeline::summary, "Physics: residual wrench statistics, falls, failures (empty otherwise).")
       .def_property_readonly("joint_names", [](const Pipeline& p) { return p.skeleton().names; })
       .def_property_readonly("recentres", &Pipeline::recentres, "recentred tracking spaces found so far (each restarted the model)")
+      .def_property_readonly("stand_ups", &Pipeline::stand_ups,
+                             "stand-ups found so far (the user stood up from a seat; each restarted the model): trackers/stand_up.hpp")
       .def_property_readonly("controller_swaps", &Pipeline::controller_swaps,
                              "times the controllers were found in the other hands and exchanged")
       .def_property_readonly("parents", [](const Pipeline& p) { return p.skeleton().parents; })

@@ -171,3 +171,33 @@ def test_offdist_seated_start(tmp_path):
         np.testing.assert_allclose(out[:72, c[f"{side}_py"]], 0.62, atol=1e-8)
         np.testing.assert_allclose(out[:72, c[f"{side}_pz"]], 0.1 - 0.3, atol=1e-8)
     np.testing.assert_allclose(out[n_pre - 1, 1:], out[n_pre, 1:], atol=0.05)  # stood up to the first sample
+
+
+def test_offdist_look_down_at_start(tmp_path):
+    """lookdown mode's session: the headset pitched down 25 deg about the head joint (the headset less
+    the device model's eye offset stays put) for 2 s, back to the session's own over 0.5 s; every other
+    column unchanged."""
+    cols = ["time"] + [f"{n}_{a}" for n in ("head", "left_hand", "right_hand")
+                       for a in ("px", "py", "pz", "qx", "qy", "qz", "qw", "valid")]
+    yaw = np.radians(40.0)  # the headset turned 40 deg to the left: pitch about its own X
+    qh = [0.0, np.sin(yaw / 2), 0.0, np.cos(yaw / 2)]
+    rows = [[i / 72.0] + [0.1, 1.6, 0.2 - 0.01 * i] + qh + [1] + [-0.2, 0.9, 0.1, 0, 0, 0, 1, 1] + [0.3, 0.9, 0.1, 0, 0, 0, 1, 1]
+            for i in range(3 * 72)]
+    path = tmp_path / "s.csv"
+    path.write_text(",".join(cols) + "\n" + "\n".join(",".join(str(v) for v in r) for r in rows) + "\n")
+    offdist.look_down_at_start(str(path))
+    out = np.array([[float(x) for x in l.split(",")] for l in path.read_text().splitlines()[1:]])
+    src = np.array(rows)
+    c = {n: i for i, n in enumerate(cols)}
+    P, Q = [c[f"head_p{a}"] for a in "xyz"], [c[f"head_q{a}"] for a in "xyzw"]
+    joint = lambda r: r[:, P] - offdist._qrot(r[:, Q], offdist.EYE_OPENXR)
+    np.testing.assert_allclose(joint(out), joint(src), atol=1e-9)              # about the head joint
+    fwd = offdist._qrot(out[:, Q], np.array([0.0, 0.0, -1.0]))
+    pitch = np.degrees(np.arcsin(-fwd[:, 1]))
+    np.testing.assert_allclose(pitch[:144], 25.0, atol=1e-6)                      # looking down 2 s
+    np.testing.assert_allclose(out[180:], src[180:], atol=1e-9)                   # the session's own from 2.5 s
+    assert np.all(np.diff(pitch[144:181]) <= 1e-9)                               # looking up in between
+    heading = np.degrees(np.arctan2(-fwd[:, 0], -fwd[:, 2]))
+    np.testing.assert_allclose(heading, 40.0, atol=1e-6)                         # the heading kept
+    keep = [i for i, n in enumerate(cols) if not n.startswith("head_p") and not n.startswith("head_q")]
+    np.testing.assert_allclose(out[:, keep], src[:, keep], atol=1e-9)

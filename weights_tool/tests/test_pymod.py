@@ -233,6 +233,24 @@ def test_calibration_controllers_on_a_table(sb, model):
 
 
 @pytest.mark.parametrize("model", ["lobstr", "n3p", "n3p_physics"])
+def test_stand_ups_counted(sb, model):
+    """3 s standing, 3 s seated (headset 0.45 m lower, controllers on the lap), a 1 s rise, 2 s
+    standing: one stand-up (trackers/stand_up.hpp); a session that stays standing has none."""
+    t, P, Q, V = standing(9.0)
+    down = np.where(t < 3, 0.0, np.where(t < 6, 1.0, np.where(t < 7, 0.5 + 0.5 * np.cos(np.pi * (t - 6)), 0.0)))
+    P[:, 0, 1] -= 0.45 * down
+    P[:, 1:3, 1] -= 0.4 * down[:, None]
+    P[:, 3, 1] -= 0.47 * down
+    p = sb.create(model)
+    assert p.stand_ups == 0
+    p.run(t, P, Q, V)
+    assert p.stand_ups == 1
+    q = sb.create(model)
+    q.run(*standing(9.0))
+    assert q.stand_ups == 0
+
+
+@pytest.mark.parametrize("model", ["lobstr", "n3p", "n3p_physics"])
 def test_calibration_control(sb, model):
     t, P, Q, V = standing()
     p = sb.create(model)

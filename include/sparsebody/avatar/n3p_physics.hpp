@@ -201,6 +201,7 @@ class N3PPhysicsPipeline : public PipelineFrontEnd<N3PPhysicsPipeline<T, HSig, H
   long long falls(control::FallReason why) const noexcept { return recovery_.falls(why); }
   long long sim_failures() const noexcept { return recovery_.sim_failures(); }  // rolled-back steps -> reset
   long long restarts() const noexcept { return recovery_.restarts(); }          // physics (re)starts
+  long long stand_ups() const noexcept { return direct_.stand_ups(); }  // direct mode's (each restarts both)
   ControllerKind controller_kind() const noexcept { return control_ ? ControllerKind::Policy : ControllerKind::ModelBased; }
   const ControlPredictor* control_predictor() const noexcept { return control_.get(); }
   ControlPredictor* control_predictor() noexcept { return control_.get(); }  // e.g. its tracker_ik switch

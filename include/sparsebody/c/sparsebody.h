@@ -167,6 +167,10 @@ typedef struct sb_calibration_report {
   double confidence;     /* [0, 1] */
   double first_time, last_time; /* s, input clock, of the window (NaN when none) */
   char message[192];     /* one line, NUL-terminated */
+  /* 1 while that controller (0 left, 1 right) still has the device model's grip offset: no standing
+   * window has seen it held (e.g. the controllers lay on a table at the first stand). */
+  int32_t grip_default[2];
+  int32_t grips_not_held; /* standing windows whose controllers were not held (their grips not taken) */
 } sb_calibration_report;
 
 typedef struct sb_weights sb_weights;
@@ -238,6 +242,11 @@ SPARSEBODY_API sb_status sb_pipeline_calibration(sb_pipeline* p, sb_calibration_
  * SB_ERR_NULL when any pointer is NULL. */
 SPARSEBODY_API sb_status sb_pipeline_stream_events(sb_pipeline* p, int32_t* recentres, int32_t* controller_swaps,
                                                    int32_t* controllers_swapped);
+/* Since creation: stand-ups found (the headset rose by more than 0.25 m, in place, from a rest of
+ * 2 s: the user stood up from a seat). Each restarted the model there, and for 1 s the feet follow it
+ * unheld (LoBSTr, Neural3Points direct and physics; README "Sitting down and standing up"). QuestSim
+ * has no detector: 0. SB_ERR_NULL when stand_ups is NULL. */
+SPARSEBODY_API sb_status sb_pipeline_stand_ups(sb_pipeline* p, int64_t* stand_ups);
 
 /* --- crowds: many avatars stepped together ------------------------------------------------------ */
 /* A crowd is `users` (1-64) avatars of SB_PIPELINE_LOBSTR or SB_PIPELINE_N3P_DIRECT on one weight set

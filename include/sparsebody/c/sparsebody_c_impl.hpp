@@ -108,6 +108,7 @@ struct PipelineBase {
   virtual int recentres() const noexcept = 0;
   virtual int controller_swaps() const noexcept = 0;
   virtual bool controllers_swapped() const noexcept = 0;
+  virtual long long stand_ups() const noexcept = 0;
 };
 
 template <class P>
@@ -181,6 +182,10 @@ struct PipelineModel final : PipelineBase {
   int recentres() const noexcept override { return p.recentres(); }
   int controller_swaps() const noexcept override { return p.controller_swaps(); }
   bool controllers_swapped() const noexcept override { return p.controllers_swapped(); }
+  long long stand_ups() const noexcept override {
+    if constexpr (kQuestSim) return 0;  // no stand-up detector
+    else return p.stand_ups();
+  }
 };
 
 // A crowd (sb_crowd): one batch of users (avatar/lobstr_batch.hpp, n3p_batch.hpp).
@@ -734,6 +739,17 @@ SPARSEBODY_API sb_status sb_pipeline_stream_events(sb_pipeline* p, int32_t* rece
   SB_CATCH_ALL(p->error)
 }
 
+SPARSEBODY_API sb_status sb_pipeline_stand_ups(sb_pipeline* p, int64_t* stand_ups) {
+  namespace c = sparsebody::capi;
+  SB_CHECK_PIPELINE(p);
+  try {
+  if (!stand_ups) return c::fail(p->error, SB_ERR_NULL, "sb_pipeline_stand_ups: stand_ups is NULL");
+  *stand_ups = p->impl->stand_ups();
+  return SB_OK;
+  }
+  SB_CATCH_ALL(p->error)
+}
+
 SPARSEBODY_API sb_status sb_pipeline_recalibrate(sb_pipeline* p) {
   SB_CHECK_PIPELINE(p);
   try {
@@ -791,6 +807,9 @@ SPARSEBODY_API sb_status sb_pipeline_calibration(sb_pipeline* p, sb_calibration_
   report->first_time = r.first_time;
   report->last_time = r.last_time;
   std::snprintf(report->message, sizeof report->message, "%s", r.message);
+  report->grip_default[0] = r.grip_default[0] ? 1 : 0;
+  report->grip_default[1] = r.grip_default[1] ? 1 : 0;
+  report->grips_not_held = r.grips_not_held;
   return SB_OK;
   }
   SB_CATCH_ALL(p->error)

@@ -78,7 +78,8 @@ SPARSEBODY_INLINE void articulated_bias(const Data<S, MB, MD>& d, const int (&id
   SPARSEBODY_UNROLL for (int t = 0; t < 6; ++t) c[t] = gather<S, N>([&](int k) { return d.c[ids[k]](t); });
   SPARSEBODY_UNROLL for (int r = 0; r < 6; ++r) {
     V s = gather<S, N>([&](int k) { return d.pA[ids[k]](r); }) + w[r];
-    SPARSEBODY_UNROLL for (int t = 0; t < 6; ++t) s += (r >= t ? Ia[r][t] : Ia[t][r]) * c[t];
+    SPARSEBODY_UNROLL for (int t = 0; t <= r; ++t) s += Ia[r][t] * c[t];  // (two loops: one with both
+    SPARSEBODY_UNROLL for (int t = r + 1; t < 6; ++t) s += Ia[t][r] * c[t];  // triangles tripped -Warray-bounds)
     pa[r] = s;
   }
 }
