@@ -680,3 +680,54 @@ TEST_CASE("LoBSTr pipeline: after walking, the feet stay put while the user stan
   CHECK(held.still_speed < free.still_speed);
   CHECK(held.calib_jump < 0.005);
 }
+
+namespace {
+// The user looks down by `degrees` through the frames: the headset pitched about the head joint (the
+// headset less the device model's eye offset, turned with it, stays put).
+void look_down(std::vector<trackers::TrackerFrame>& frames, double degrees) {
+  const Eigen::Vector3d e = features::DeviceModel::default_orientation_offset() * features::DeviceModel{}.eye;  // headset frame
+  for (auto& f : frames) {
+    const Eigen::Quaterniond q = trackers::to_eigen(f.pose[0].orientation);
+    const Eigen::Vector3d joint = trackers::to_eigen(f.pose[0].position) - q * e;
+    const Eigen::Quaterniond down = q * Eigen::Quaterniond(Eigen::AngleAxisd(-degrees * M_PI / 180, Eigen::Vector3d::UnitX()));
+    f.pose[0] = {trackers::to_xr(down), trackers::to_xr(Eigen::Vector3d(joint + down * e))};
+  }
+}
+// The calibrated head's tilt from level at a frame (deg): what the networks see of it.
+double head_tilt(const features::Calibration& c, const trackers::TrackerFrame& f) {
+  const Eigen::Matrix3d R = (trackers::to_eigen(f.pose[0].orientation) * c.offset[0]).toRotationMatrix();
+  return std::acos(std::clamp(R(1, 1), -1.0, 1.0)) * 180 / M_PI;
+}
+}  // namespace
+
+TEST_CASE("auto calibration: a user looking down at the controllers through the stand gets a level head and the upright size") {
+  auto stand = sparsebody_test::session({{Phase::Stand, 2.0, 1.65}});
+  const auto level = stand.back();  // the same user looking ahead
+  look_down(stand, 25);
+  SUBCASE("level_head (default): the headset's offset is the device model's, the eye height the upright one") {
+    Feeder f;
+    f.feed(stand);
+    REQUIRE(f.r().status == features::CalibrationStatus::Calibrated);
+    CHECK(f.r().eye_height == doctest::Approx(1.65).epsilon(0.002).scale(0));  // the headset itself is ~5 cm lower
+    CHECK(head_tilt(f.cal.calibration(), level) < 1e-6);                         // looking ahead: level
+    CHECK(head_tilt(f.cal.calibration(), stand.back()) == doctest::Approx(25).epsilon(1e-6));
+  }
+  SUBCASE("level_head = false: the head looking down is taken for level (the behaviour before)") {
+    features::AutoCalibrationConfig cfg;
+    cfg.level_head = false;
+    Feeder f(cfg);
+    f.feed(stand);
+    REQUIRE(f.r().status == features::CalibrationStatus::Calibrated);
+    CHECK(f.r().eye_height < 1.65 - 0.04);
+    CHECK(head_tilt(f.cal.calibration(), level) == doctest::Approx(25).epsilon(1e-6));  // looking ahead reads 25 deg up
+  }
+  SUBCASE("a headset tilted less than level_head_min_tilt (10 deg): the window's offset (a mounting tilt is absorbed)") {
+    auto slight = sparsebody_test::session({{Phase::Stand, 2.0, 1.65}});
+    look_down(slight, 6);
+    Feeder f;
+    f.feed(slight);
+    REQUIRE(f.r().status == features::CalibrationStatus::Calibrated);
+    CHECK(head_tilt(f.cal.calibration(), slight.back()) < 1e-6);
+    CHECK(f.r().eye_height == doctest::Approx(1.65).epsilon(0.002).scale(0));  // still the upright eye height
+  }
+}

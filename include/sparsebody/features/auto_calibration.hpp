@@ -11,8 +11,11 @@
 //   - orientation offsets o_k = q_k^-1 Yaw(headset forward) at the window's stillest frame (head
 //     plus controller speed smallest): the T-pose formula the networks were trained with (every
 //     calibrated tracker has the body's facing frame), which needs an upright user facing
-//     forward, not a T-pose;
-//   - the eye height: the median headset height over the window (above the floor);
+//     forward, not a T-pose. The headset's is the device model's (level_head): OpenXR gives its
+//     tilt against gravity, and a user may look down at the controllers while standing;
+//   - the eye height: the median over the window of the headset height the head would give
+//     upright (the head joint's height, the eye offset turned with the headset, plus e.y; above the
+//     floor);
 //   - stature = eye height / 0.936: eye height is 0.936 of stature in Winter, "Biomechanics and
 //     Motor Control of Human Movement", Fig. 4.1 (segment lengths after Drillis & Contini 1966);
 //   - s = standard head-joint height / (eye height - e.y) (features/calibration.hpp).
@@ -113,6 +116,15 @@ struct AutoCalibrationConfig {
   // The validation sessions' standing first frames, with each user's grip (up to 30 deg off),
   // give 0.5-33 deg.
   double max_grip_deviation = 45.0;
+  // The head level when the headset is (OpenXR gives its tilt against gravity): the headset's
+  // orientation offset is the device model's (DeviceModel::default_orientation_offset), not taken
+  // from the window, and each window sample's eye height is the one its head would have upright
+  // (head joint height, the eye offset turned with the headset, plus e.y). A user who looks down at
+  // the controllers through the first stand (25 deg) otherwise calibrated a head 25 deg down for
+  // the whole session (head error 2.5 -> 5.9 cm) and a body ~3 % short. Only with a device model's
+  // eye offset (real headsets; not DeviceModel::none(), trackers at the joints).
+  bool level_head = true;
+  double level_head_min_tilt = 10.0;  // deg: ... when the headset tilts more than this at the window
 };
 
 class AutoCalibration {
@@ -371,6 +383,10 @@ class AutoCalibration {
 
   // The headset's up axis near world up (its Y column's y).
   bool upright(const Eigen::Matrix3d& R) const noexcept { return R(1, 1) > cfg_.min_up_y; }
+  bool level_head() const noexcept { return cfg_.level_head && devices_.eye.squaredNorm() > 0; }
+  static double tilt_degrees(const Eigen::Quaterniond& q) noexcept {  // the headset's up axis from world up
+    return std::acos(std::clamp(q.normalized().toRotationMatrix()(1, 1), -1.0, 1.0)) * 180.0 / M_PI;
+  }
   // s = standard head-joint height / the user's (eye height above the floor - e.y).
   double scale_of_eye(double eye) const noexcept { return standard_head_ / (eye - devices_.eye.y()); }
 
@@ -378,6 +394,7 @@ class AutoCalibration {
     double t = 0;
     long long frame = 0;
     Eigen::Vector3d head = Eigen::Vector3d::Zero();
+    double eye_y = 0;     // the headset's height as the head would have it upright (level_head), else head.y()
     double pelvis_y = 0;  // the pelvis tracker's height (when valid[3])
     double head_speed = 0;
     std::array<double, 2> ctl_speed{};
@@ -416,6 +433,9 @@ class AutoCalibration {
     s.t = time;
     s.frame = frame_ - 1;
     s.head = p;
+    s.eye_y = p.y();
+    if (level_head())  // head joint height (the eye offset e turned with the headset) + e.y
+      s.eye_y = p.y() - (R * (DeviceModel::default_orientation_offset() * devices_.eye)).y() + devices_.eye.y();
     s.pelvis_y = pose[3].position.y();
     for (int k = 0; k < trackers::kTrackerCount; ++k) {
       s.valid[k] = valid[k] && finite(pose[k]);
@@ -503,7 +523,7 @@ class AutoCalibration {
     best_score.fill(std::numeric_limits<double>::infinity());
     for (long long i = a0; i <= a1; ++i) {
       const Sample& s = at(i);
-      heights_[static_cast<std::size_t>(i - a0)] = s.head.y();
+      heights_[static_cast<std::size_t>(i - a0)] = s.eye_y;
       sum += s.head_speed;
       lo = std::min(lo, s.head.y());
       hi = std::max(hi, s.head.y());
@@ -626,6 +646,7 @@ class AutoCalibration {
 
   // o_k = q_k^-1 Yaw(headset forward) at a window's sample (the pelvis: times pelvis_standing).
   Eigen::Quaterniond window_offset(const Sample& s, int k) const noexcept {
+    if (k == 0 && level_head() && tilt_degrees(s.q[0]) > cfg_.level_head_min_tilt) return DeviceModel::default_orientation_offset();
     Eigen::Matrix3d target = Calibration::facing(s.q[0]);
     if (k == 3) target = target * devices_.pelvis_standing.toRotationMatrix();
     return Eigen::Quaterniond(s.q[k].normalized().toRotationMatrix().transpose() * target);
