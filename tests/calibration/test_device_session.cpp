@@ -152,11 +152,13 @@ void check_pipeline(const W& weights, C cfg, const char* name, double max_standi
   Eigen::Quaterniond R;
   clip_head(s, 9.0, h, top, R);
   // The clip's true stature: the top of its head (the Head end site) standing. (CMU's end site is
-  // only 10 cm above its head joint, below the vertex: the estimate comes out 4.5 % above it.)
+  // only 10 cm above its head joint, below the vertex: the estimate comes out 5.3 % above it; 4.5 %
+  // before the eye height was taken upright, level_head: the performer's head is bent a little.)
   MESSAGE("stature " << r.stature << " m, clip head top " << top.y() << " m, head joint " << h.y() << " m");
-  CHECK(std::abs(r.stature / top.y() - 1) < 0.05);
-  // the window's eye height is the clip's standing head joint + e.y (the median of a still window)
-  CHECK(std::abs(r.eye_height - (h.y() + 0.08)) < 0.02);
+  CHECK(std::abs(r.stature / top.y() - 1) < 0.06);
+  // the window's eye height is the clip's standing head joint + e.y (the median of a still window;
+  // the upright eye height: within 2 mm, before level_head within 2 cm)
+  CHECK(std::abs(r.eye_height - (h.y() + 0.08)) < 0.002);
   // the same motion with trackers at the joints and the clip's size given: the pipeline's own head error
   P q(weights, cfg);
   features::Calibration at_joints;
