@@ -336,6 +336,20 @@ TEST_CASE("skeleton queries: NULL, range, capacity") {
   sb_pipeline_destroy(p);
 }
 
+// One frame with every tracker valid at these positions (head, left, right, pelvis), level orientations.
+static sb_status push_positions(sb_pipeline* p, double time, const float (&pos)[4][3]) {
+  sb_tracker_frame f{};
+  f.struct_size = sizeof f;
+  f.time = time;
+  for (int k = 0; k < 4; ++k) {
+    f.pose[k].position = {pos[k][0], pos[k][1], pos[k][2]};
+    f.pose[k].orientation = {0, 0, 0, 1};
+  }
+  f.valid = SB_VALID_HEAD | SB_VALID_LEFT_HAND | SB_VALID_RIGHT_HAND | SB_VALID_PELVIS;
+  int32_t steps = 0;
+  return sb_pipeline_push(p, &f, &steps);
+}
+
 TEST_CASE("stream events: controllers held in the other hands are found and reported, reset forgets them") {
   // A user standing 3 s with the headset's "left" controller in the right hand (OpenXR: identity
   // headset faces -Z, +X is the user's right) and the other in the left, arms hanging.
@@ -350,18 +364,9 @@ TEST_CASE("stream events: controllers held in the other hands are found and repo
     CHECK(swaps == 0);
     CHECK(now == 0);
     for (int i = 0; i < 216; ++i) {
-      sb_tracker_frame f{};
-      f.struct_size = sizeof f;
-      f.time = i / 72.0;
       const float sway = 0.003f * std::sin(0.1f * i);
       const float pos[4][3] = {{sway, 1.60f, 0}, {0.22f, 1.05f, -0.1f}, {-0.22f, 1.05f, -0.1f}, {0, 0.95f, 0}};
-      for (int k = 0; k < 4; ++k) {
-        f.pose[k].position = {pos[k][0], pos[k][1], pos[k][2]};
-        f.pose[k].orientation = {0, 0, 0, 1};
-      }
-      f.valid = SB_VALID_HEAD | SB_VALID_LEFT_HAND | SB_VALID_RIGHT_HAND | SB_VALID_PELVIS;
-      int32_t steps = 0;
-      REQUIRE(sb_pipeline_push(p, &f, &steps) == SB_OK);
+      REQUIRE(push_positions(p, i / 72.0, pos) == SB_OK);
     }
     REQUIRE(sb_pipeline_stream_events(p, &rec, &swaps, &now) == SB_OK);
     CHECK(rec == 0);
@@ -388,21 +393,12 @@ TEST_CASE("stand-ups: a user who stands up from a seat is counted (QuestSim: no 
     for (int i = 0; i < 9 * 72; ++i) {
       const double t = i / 72.0;
       const double down = t < 3 ? 0.0 : t < 6 ? 1.0 : t < 7 ? 0.5 + 0.5 * std::cos(3.14159265 * (t - 6)) : 0.0;  // 1: seated
-      sb_tracker_frame f{};
-      f.struct_size = sizeof f;
-      f.time = t;
       const float sway = 0.003f * std::sin(0.1f * i), d = float(down);
       const float pos[4][3] = {{sway, 1.60f - 0.45f * d, -0.05f * d},
                                {-0.22f + 0.07f * d, 1.05f - 0.4f * d, -0.1f - 0.2f * d},
                                {0.22f - 0.07f * d, 1.05f - 0.4f * d, -0.1f - 0.2f * d},
                                {0, 0.95f - 0.47f * d, 0}};
-      for (int k = 0; k < 4; ++k) {
-        f.pose[k].position = {pos[k][0], pos[k][1], pos[k][2]};
-        f.pose[k].orientation = {0, 0, 0, 1};
-      }
-      f.valid = SB_VALID_HEAD | SB_VALID_LEFT_HAND | SB_VALID_RIGHT_HAND | SB_VALID_PELVIS;
-      int32_t steps = 0;
-      REQUIRE(sb_pipeline_push(p, &f, &steps) == SB_OK);
+      REQUIRE(push_positions(p, t, pos) == SB_OK);
     }
     REQUIRE(sb_pipeline_stand_ups(p, &n) == SB_OK);
     CHECK(n == (kind == SB_PIPELINE_QUESTSIM ? 0 : 1));
