@@ -224,6 +224,8 @@ TEST_CASE("pipeline handles: NULL, foreign, destroyed, a weights handle, in ever
     CHECK(sb_pipeline_calibration(h, &r) == want);
     int32_t ev[3];
     CHECK(sb_pipeline_stream_events(h, ev, ev + 1, ev + 2) == want);
+    int64_t stand_ups = 0;
+    CHECK(sb_pipeline_stand_ups(h, &stand_ups) == want);
     if (h) CHECK(sb_pipeline_destroy(h) == SB_ERR_BAD_HANDLE);
     if (h != handles[3]) CHECK(std::strlen(sb_last_error(h)) > 0);  // not a handle: this thread's message
   }

@@ -139,7 +139,8 @@ class AutoCalibration {
   // (DeviceModel::pelvis_from_standing; 0: the pelvis tracker keeps the device model's offset).
   AutoCalibration(const DeviceModel& devices, double standard_head_height, AutoCalibrationConfig cfg = {},
                   double standard_hips_height = 0) noexcept
-      : cfg_(cfg), devices_(devices), standard_head_(standard_head_height), standard_hips_(standard_hips_height) {
+      : cfg_(cfg), devices_(devices), eye_in_headset_(DeviceModel::default_orientation_offset() * devices.eye),
+        standard_head_(standard_head_height), standard_hips_(standard_hips_height) {
     recalibrate();
   }
 
@@ -435,7 +436,7 @@ class AutoCalibration {
     s.head = p;
     s.eye_y = p.y();
     if (level_head())  // head joint height (the eye offset e turned with the headset) + e.y
-      s.eye_y = p.y() - (R * (DeviceModel::default_orientation_offset() * devices_.eye)).y() + devices_.eye.y();
+      s.eye_y = p.y() - R.row(1).dot(eye_in_headset_) + devices_.eye.y();
     s.pelvis_y = pose[3].position.y();
     for (int k = 0; k < trackers::kTrackerCount; ++k) {
       s.valid[k] = valid[k] && finite(pose[k]);
@@ -692,6 +693,7 @@ class AutoCalibration {
 
   AutoCalibrationConfig cfg_;
   DeviceModel devices_;
+  Eigen::Vector3d eye_in_headset_;  // e in the headset's own (OpenXR) frame: level_head's per-frame eye height
   bool floor_fallback_ = false;  // y = 0 was found not to be the floor (floor_fallback_eye)
   double standard_head_ = 1.38;
   double standard_hips_ = 0;
